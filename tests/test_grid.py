@@ -1,0 +1,95 @@
+"""Planning grid: oriented boxes -> occupied cells, margin -> dangerous cells, layer costs."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from pipeline.scene import SceneObject
+from planner.grid import CellState, CostWeights, GridError, Workspace, build_grid
+
+
+def _box(x, y, w, h, l, yaw=0.0, oid="b"):
+    return SceneObject(oid, "cardboard_box", (x, y, h / 2), (w, h, l), yaw=yaw)
+
+
+def test_default_workspace_is_the_papers_room() -> None:
+    ws = Workspace()
+    assert ws.shape == (20, 32, 12)
+    assert ws.cell_of((0.1, 0.1, 0.1)) == (0, 0, 0)
+    assert ws.cell_of((5.0, 8.0, 3.0)) == (19, 31, 11)
+    assert ws.cell_of((5.1, 1, 1)) is None
+
+
+def test_axis_aligned_box_marks_exact_cells() -> None:
+    ws = Workspace(resolution=0.25)
+    # box spans x 1.0..2.0 (l along x), y 3.0..3.5, z 0..0.75 -> 4 x 2 x 3 cells
+    g = build_grid([_box(1.5, 3.25, 0.5, 0.75, 1.0)], ws, margin=0.0)
+    occ = np.argwhere(g.state == CellState.OCCUPIED)
+    assert len(occ) == 4 * 2 * 3
+    assert occ[:, 0].min() == 4 and occ[:, 0].max() == 7
+    assert occ[:, 1].min() == 12 and occ[:, 1].max() == 13
+    assert occ[:, 2].max() == 2
+    assert g.owner_of(tuple(occ[0])) == "b"
+
+
+def test_yaw_rotates_the_footprint() -> None:
+    ws = Workspace(resolution=0.1)
+    long_x = build_grid([_box(2.5, 4.0, 0.2, 0.5, 2.0, yaw=0.0)], ws, margin=0.0)
+    long_y = build_grid([_box(2.5, 4.0, 0.2, 0.5, 2.0, yaw=math.pi / 2)], ws, margin=0.0)
+    ex = np.argwhere(long_x.state[:, :, 0] == CellState.OCCUPIED)
+    ey = np.argwhere(long_y.state[:, :, 0] == CellState.OCCUPIED)
+    assert np.ptp(ex[:, 0]) > 5 * np.ptp(ex[:, 1])
+    assert np.ptp(ey[:, 1]) > 5 * np.ptp(ey[:, 0])
+    diag = build_grid([_box(2.5, 4.0, 0.2, 0.5, 2.0, yaw=math.pi / 4)], ws, margin=0.0)
+    ed = np.argwhere(diag.state[:, :, 0] == CellState.OCCUPIED)
+    # cells along the diagonal: x and y spread equally
+    assert abs(np.ptp(ed[:, 0]) - np.ptp(ed[:, 1])) <= 1
+
+
+def test_margin_makes_a_dangerous_shell() -> None:
+    ws = Workspace(resolution=0.25)
+    g = build_grid([_box(2.5, 4.0, 0.5, 0.5, 0.5)], ws, margin=0.3)
+    occ = g.state == CellState.OCCUPIED
+    dan = g.state == CellState.DANGEROUS
+    assert occ.sum() == 2 * 2 * 2
+    # face neighbours (0.25 m) are dangerous, diagonal ones (0.35 m) are not at margin 0.3
+    # a 2x2x2 cube on the floor: 4 side faces of 2x2 cells plus the 2x2 top (no floor below)
+    assert dan.sum() == 4 * 4 + 4
+    assert not (occ & dan).any()
+
+
+def test_counts_and_costs() -> None:
+    ws = Workspace(resolution=0.5)
+    g = build_grid([_box(2.5, 4.0, 1.0, 1.0, 1.0)], ws, margin=0.5)
+    w = CostWeights(ground=1.0, takeoff=10.0, flight=3.0, danger=4.0, forbid_low_danger=False)
+    c = g.cost(w)
+    assert sum(g.counts().values()) == np.prod(ws.shape)
+    free = g.state == CellState.FREE
+    assert np.all(c[:, :, 0][free[:, :, 0]] == 1.0)
+    assert np.all(c[:, :, 1][free[:, :, 1]] == 10.0)
+    assert np.all(c[:, :, 2:][free[:, :, 2:]] == 3.0)
+    dan = g.state == CellState.DANGEROUS
+    assert np.all(c[:, :, 0][dan[:, :, 0]] == 4.0)
+    assert np.all(np.isinf(c[g.state == CellState.OCCUPIED]))
+    c2 = g.cost(CostWeights(forbid_low_danger=True))
+    assert np.all(np.isinf(c2[:, :, 1][dan[:, :, 1]]))
+
+
+def test_empty_scene_is_all_free() -> None:
+    g = build_grid([], Workspace())
+    assert g.counts()["free"] == 20 * 32 * 12
+
+
+@pytest.mark.parametrize("kw", [dict(resolution=0.0), dict(max=(0.0, 8.0, 3.0)), dict(resolution=float("nan"))])
+def test_bad_workspace(kw) -> None:
+    with pytest.raises(GridError):
+        Workspace(**kw)
+
+
+def test_object_in_camera_frame_rejected() -> None:
+    o = SceneObject("c", "chair", (0, 0, 2), (0.5, 0.9, 0.5), frame="camera")
+    with pytest.raises(GridError, match="world"):
+        build_grid([o], Workspace())
