@@ -89,6 +89,33 @@ def cmd_plan(args: argparse.Namespace) -> int:
     return 0
 
 
+# --- models -------------------------------------------------------------------------------------
+
+
+def cmd_models(args: argparse.Namespace) -> int:
+    from pipeline.models.cli_support import models_fetch, models_list, models_verify
+
+    if args.action == "list":
+        print(models_list(args.dir))
+        return 0
+    if args.action == "fetch":
+        if not args.names:
+            raise CliError("fetch needs a model or set name, e.g. 'morphonavi models fetch offline'")
+        return models_fetch(args.names, args.dir)
+    text, code = models_verify(args.dir, args.names or None)
+    print(text)
+    return code
+
+
+def _add_models_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
+    p = sub.add_parser("models", help="list, fetch (download with checksums) or verify model weights",
+                       description="Model weights live in --dir, else $MORPHONAVI_MODELS, else the user cache dir.")
+    p.add_argument("action", choices=("list", "fetch", "verify"))
+    p.add_argument("names", nargs="*", help="model or set names (default, offline, cloud, yolox_nano, ...)")
+    p.add_argument("--dir", type=Path, default=None, help="models directory")
+    p.set_defaults(func=cmd_models)
+
+
 # --- entry point --------------------------------------------------------------------------------
 
 
@@ -108,6 +135,7 @@ def build_parser() -> argparse.ArgumentParser:
     _add_planner_args(p)
     p.set_defaults(func=cmd_plan)
 
+    _add_models_parser(sub)
     for register in _EXTRA_COMMANDS:
         register(sub)
     return parser

