@@ -136,12 +136,16 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(func=cmd_plan)
 
     _add_models_parser(sub)
-    for register in _EXTRA_COMMANDS:
+    for register in _extra_commands():
         register(sub)
     return parser
 
 
-_EXTRA_COMMANDS: list[Callable[[argparse._SubParsersAction], None]] = []  # type: ignore[type-arg]
+def _extra_commands() -> list[Callable[[argparse._SubParsersAction], None]]:  # type: ignore[type-arg]
+    """Subcommands whose parsers live beside the code they run."""
+    from console.console_cmd import add_console_parser
+
+    return [add_console_parser]
 
 
 def main(argv: Sequence[str] | None = None) -> int:

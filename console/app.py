@@ -1,0 +1,408 @@
+"""The operator console: a viser server showing the digital twin, wired to the session and the robot.
+
+:class:`ConsoleApp` builds the pieces and connects them; it holds no state of its own beyond
+handles (the state is :class:`~console.session.Session`). Layout: the control panel on the right
+(robot status, Map, Plan, Mission, Session) and a camera panel on the left (photo with detections,
+depth); the 3D view shows the workspace, grid layers, objects, paths, the robot twin and the last
+capture's frustum. Every browser tab shares the same scene and controls.
+
+Safety: the server binds to 127.0.0.1 unless another host is given explicitly; any other
+address is warned about, since whoever reaches the port can drive the robot.
+"""
+
+from __future__ import annotations
+
+import html
+import ipaddress
+import logging
+import socket
+import threading
+import time
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Callable
+
+import viser
+
+from planner.grid import Workspace
+
+from .capture_view import CaptureView
+from .grid_view import GridView
+from .mapping_job import MappingJob, Perceiver
+from .mission_view import MissionRunner, MissionView
+from .objects_view import ObjectsView
+from .paths_view import PathsView
+from .robot_view import RobotView
+from .scene_watch import FrameError, NotReady, SceneWatcher, objects_to_world
+from .session import JOB, NOTICE, SESSION_FILE, JobStatus, Notice, RobotSnapshot, Session, SessionError
+
+log = logging.getLogger(__name__)
+
+BRAND_RGB = (0, 122, 204)
+LOOPBACK_NAMES = ("localhost",)
+
+
+def check_listenable(host: str) -> None:
+    """Raise ``OSError`` naming ``host`` if no socket can listen there (viser would wait forever)."""
+    try:
+        infos = socket.getaddrinfo(host, None, type=socket.SOCK_STREAM)
+    except socket.gaierror as exc:
+        raise OSError(f"cannot listen on {host!r}: unknown host ({exc})") from None
+    family, _, _, _, addr = infos[0]
+    with socket.socket(family, socket.SOCK_STREAM) as sock:
+        try:
+            sock.bind((addr[0], 0))
+        except OSError as exc:
+            raise OSError(f"cannot listen on {host!r}: {exc.strerror or exc}; is it an address of this machine?") from None
+
+
+def is_loopback(host: str) -> bool:
+    """Whether ``host`` only accepts connections from this machine."""
+    if host in LOOPBACK_NAMES:
+        return True
+    try:
+        return ipaddress.ip_address(host).is_loopback
+    except ValueError:
+        return False
+
+
+@dataclass
+class ConsoleConfig:
+    """How to start the console.
+
+    Attributes:
+        robot: Robot link spec: ``sim`` or ``mavlink:<pymavlink connection string>``.
+        scene_dir: Watched scene folder (scene JSON files dropped there are spawned).
+        session_dir: Session folder (saves, capture images).
+        host: Interface to listen on; 127.0.0.1 unless explicitly asked otherwise.
+        port: TCP port (0 = any free port).
+        models: Folder with offline model weights, or ``None`` (simulator: ground truth).
+        fresh: Start from an empty session instead of restoring the last one.
+        resolution: Planning grid cell size [m].
+        margin: Robot radius [m] (dangerous margin around obstacles).
+    """
+
+    robot: str = "sim"
+    scene_dir: Path | None = None
+    session_dir: Path = Path(".morphonavi/session")
+    host: str = "127.0.0.1"
+    port: int = 8080
+    models: Path | None = None
+    fresh: bool = False
+    resolution: float = 0.25
+    margin: float = 0.35
+
+
+class ConsoleApp:
+    """The running console: server, session, robot link, views, background jobs.
+
+    Args:
+        config: Start-up options.
+        link: A robot link to use instead of opening ``config.robot`` (tests).
+        perceiver: A perception backend to use instead of choosing one (tests).
+    """
+
+    def __init__(self, config: ConsoleConfig, link: Any = None, perceiver: Perceiver | None = None) -> None:
+        self.config = config
+        self._link_override = link
+        self._perceiver_override = perceiver
+        self.server: viser.ViserServer | None = None
+        self.session: Session | None = None
+        self.link: Any = None
+        self.mapping: MappingJob | None = None
+        self.runner: MissionRunner | None = None
+        self.watcher: SceneWatcher | None = None
+        self.views: dict[str, Any] = {}
+        self._closers: list[Callable[[], None]] = []
+        self._stopped = threading.Event()
+
+    # --- start / stop ------------------------------------------------------------------------------
+    @property
+    def url(self) -> str:
+        assert self.server is not None, "start() first"
+        host = self.config.host if self.config.host not in ("0.0.0.0", "::") else "127.0.0.1"
+        return f"http://{host}:{self.server.get_port()}/"
+
+    def start(self) -> "ConsoleApp":
+        """Open the link, restore the session, start the server and the background threads."""
+        cfg = self.config
+        check_listenable(cfg.host)
+        if not is_loopback(cfg.host):
+            log.warning("listening on %s: anyone who can reach this address and port can see the map and "
+                        "DRIVE THE ROBOT; there is no login. Use the default 127.0.0.1 unless you must.", cfg.host)
+        from .link.world import DEFAULT_START
+
+        self.link = self._link_override if self._link_override is not None else self._open_link(cfg.robot)
+        start = DEFAULT_START.translation
+        ws = Workspace(resolution=cfg.resolution)
+        self.session = session = Session(cfg.session_dir, start=start, workspace=ws, margin=cfg.margin)
+        restored: list[str] | None = None
+        if not cfg.fresh:
+            try:
+                restored = session.restore_last()
+            except SessionError as exc:
+                kept = session.folder / f"{SESSION_FILE}.unreadable-{time.strftime('%Y%m%d-%H%M%S')}"
+                (session.folder / SESSION_FILE).replace(kept)
+                log.error("the last session could not be restored (%s); it was kept as %s and the console "
+                          "starts empty", exc, kept.name)
+        perceiver = self._perceiver_override or self._choose_perceiver()
+        self.mapping = MappingJob(session, self._take_photo, perceiver)
+        self.runner = self._make_runner()
+
+        self.server = server = viser.ViserServer(host=cfg.host, port=cfg.port, label="MorphoNavi", verbose=False)
+        self._closers.append(server.stop)
+        self._layout(perceiver)
+        session.subscribe(self._on_session_event)
+        self._connect_robot()
+        if self.runner is not None and hasattr(self.runner, "close"):
+            self._closers.append(self.runner.close)  # stopped before the link closes
+
+        scene_dir = cfg.scene_dir if cfg.scene_dir is not None else session.folder.parent / "scenes"
+        self.watcher = SceneWatcher(scene_dir, self._spawn_file, self._bad_file, spawn_existing=restored is None)
+        self.watcher.start()
+        self._closers.append(self.watcher.stop)
+        log.info("MorphoNavi console at %s (robot: %s, session: %s, watched scenes: %s)",
+                 self.url, cfg.robot, session.folder, self.watcher.folder)
+        if restored:
+            for note in restored:
+                log.info("restored session: %s", note)
+        return self
+
+    def stop(self) -> None:
+        """Stop threads, close the link and the server (idempotent)."""
+        if self._stopped.is_set():
+            return
+        self._stopped.set()
+        for close in reversed(self._closers):
+            try:
+                close()
+            except Exception:
+                log.exception("error while stopping")
+        self._closers.clear()
+
+    def serve_forever(self) -> None:
+        """Block until Ctrl-C, then stop."""
+        try:
+            while not self._stopped.wait(0.5):
+                pass
+        except KeyboardInterrupt:
+            pass
+        finally:
+            self.stop()
+
+    # --- robot link ---------------------------------------------------------------------------------
+    @staticmethod
+    def _open_link(spec: str) -> Any:
+        try:
+            from .link import open_link
+        except ImportError:  # the link package without its opener: only the simulator can be built
+            if spec != "sim":
+                raise
+            from .link.sim import SimRobot
+
+            return SimRobot()
+        return open_link(spec, connect=False)  # connected in the background: no vehicle, still a console
+
+    def _connect_robot(self) -> None:
+        """Connect in the background (a missing vehicle must not stop the console) and stream state."""
+        link, session = self.link, self.session
+        assert session is not None
+
+        def on_state(st: Any) -> None:
+            if self._stopped.is_set():
+                return  # a late state while shutting down: the views are gone
+            session.set_robot(RobotSnapshot(
+                pose=st.pose, mode=getattr(st.mode, "value", str(st.mode)), armed=bool(st.armed),
+                battery=st.battery, healthy=bool(st.link_ok),
+                detail="" if st.health in ("", "ok") else str(st.health), stamp=float(st.time),
+            ))
+
+        self._closers.append(link.subscribe(on_state))
+
+        def connect() -> None:
+            failures = 0
+            while not self._stopped.is_set():
+                try:
+                    if not link.connected:
+                        link.connect(timeout=10.0)
+                    st = link.latest_state()
+                    if st is not None:
+                        on_state(st)
+                    if failures:
+                        session.notify("Robot link", f"connected to {self.config.robot}", "success")
+                    return
+                except Exception as exc:
+                    failures += 1
+                    if failures == 1:  # tell the operators once; keep retrying quietly
+                        session.notify("Robot link", f"cannot connect to {self.config.robot}: {exc}; "
+                                       "retrying every few seconds", "warning")
+                    else:
+                        log.info("robot link still down (%d attempts): %s", failures, exc)
+                    self._stopped.wait(3.0)
+
+        threading.Thread(target=connect, name="robot-connect", daemon=True).start()
+        self._closers.append(link.close)
+
+    def _take_photo(self) -> Any:
+        if not self.link.connected:
+            raise RuntimeError(f"the robot link ({self.config.robot}) is not connected")
+        return self.link.capture()
+
+    # --- pluggable backends -------------------------------------------------------------------------
+    def _choose_perceiver(self) -> Perceiver:
+        from .mapping_job import choose_perceiver
+
+        return choose_perceiver(self.link, self.config.models)
+
+    def _make_runner(self) -> MissionRunner | None:
+        from .mission_view import make_runner
+
+        assert self.session is not None
+        return make_runner(self.link, self.session)
+
+    # --- layout ----------------------------------------------------------------------------------------
+    def _layout(self, perceiver: Perceiver) -> None:
+        server, session = self.server, self.session
+        assert server is not None and session is not None
+        gui = server.gui
+        server.gui.configure_theme(show_share_button=False, brand_color=BRAND_RGB, control_width="large",
+                                   show_logo=False)
+        ws = session.workspace
+        cx, cy = (ws.min[0] + ws.max[0]) / 2, (ws.min[1] + ws.max[1]) / 2
+        server.initial_camera.position = (cx - 2.1, ws.min[1] - 2.4, 4.3)
+        server.initial_camera.look_at = (cx + 0.1, cy - 1.1, 0.0)
+        server.initial_camera.up = (0.0, 0.0, 1.0)
+
+        paths_holder: dict[str, PathsView] = {}
+        self.views["robot"] = RobotView(server, session, self.config.robot)
+        with gui.add_folder("Map"):
+            cap = gui.add_button("Capture & map", icon=viser.Icon.CAMERA, color="blue",
+                                 hint="Ask the robot for a photo and its pose, detect objects and add them to the map")
+            self._job_bar = gui.add_progress_bar(0.0, visible=False, animated=True)
+            self._job_md = gui.add_markdown(f"<small>perception: <b>{html.escape(perceiver.label)}</b></small>")
+            cap.on_click(self._on_capture)
+            self.views["grid"] = GridView(server, session)
+            self.views["objects"] = ObjectsView(
+                server, session, on_node_click=lambda cid: paths_holder["p"].note_node_click(cid) if paths_holder else None,
+                layers=self.views["grid"].layers_folder)
+        with gui.add_folder("Plan"):
+            paths_holder["p"] = self.views["paths"] = PathsView(server, session)
+        with gui.add_folder("Mission"):
+            self.views["mission"] = MissionView(server, session, self.runner)
+        with gui.add_folder("Session", expand_by_default=False):
+            self._session_controls()
+        camera = gui.add_panel()
+        with camera.add_tab("Camera", viser.Icon.CAMERA):
+            self.views["capture"] = CaptureView(server, session, colors=self.views["objects"].colors)
+        camera.dock_left()
+        camera.set_width(330)
+        server.gui.main_panel.dock_right()
+        server.gui.main_panel.set_width(370)
+
+    def _session_controls(self) -> None:
+        server, session = self.server, self.session
+        assert server is not None and session is not None
+        gui = server.gui
+        gui.add_markdown(f"<small>Folder: <code>{html.escape(str(session.folder))}</code><br>"
+                         "The session is saved after every change and restored at start.</small>")
+        name = gui.add_text("Name", "snapshot", hint="A file name inside the session folder (.json is added)")
+        save = gui.add_button("Save as", icon=viser.Icon.DEVICE_FLOPPY)
+        load = gui.add_button("Load", icon=viser.Icon.FOLDER_OPEN)
+        listing = gui.add_markdown("")
+
+        def refresh() -> None:
+            saves = session.list_saves()
+            listing.content = ("<small>saved: " + ", ".join(f"<code>{html.escape(s)}</code>" for s in saves[:12])
+                               + "</small>") if saves else ""
+
+        def tell(event: Any, title: str, body: str, color: str) -> None:
+            if event.client is not None:
+                event.client.add_notification(title, body, color=color, auto_close_seconds=6.0)
+
+        @save.on_click
+        def _(event: Any) -> None:
+            try:
+                path = session.save(str(name.value))
+            except SessionError as exc:
+                tell(event, "Not saved", str(exc), "red")
+                return
+            tell(event, "Saved", f"{path.name} in the session folder", "green")
+            refresh()
+
+        @load.on_click
+        def _(event: Any) -> None:
+            try:
+                notes = session.load(str(name.value))
+            except SessionError as exc:
+                tell(event, "Not loaded", str(exc), "red")
+                return
+            tell(event, "Loaded", "; ".join(notes) or f"{name.value}", "green")
+
+        refresh()
+
+    # --- events ---------------------------------------------------------------------------------------
+    def _on_capture(self, event: Any) -> None:
+        assert self.mapping is not None
+        if not self.mapping.start() and event.client is not None:
+            event.client.add_notification("Busy", "a capture is already being mapped", color="yellow",
+                                          auto_close_seconds=4.0)
+
+    def _on_session_event(self, topic: str, payload: Any) -> None:
+        if topic == NOTICE:
+            self._broadcast(payload)
+        elif topic == JOB:
+            self._show_job(payload)
+
+    def _broadcast(self, notice: Notice) -> None:
+        if self.server is None:
+            return
+        color = {"error": "red", "warning": "yellow", "success": "green"}.get(notice.level, "blue")
+        for client in self.server.get_clients().values():
+            client.add_notification(notice.title, notice.body, color=color,
+                                    auto_close_seconds=None if notice.level == "error" else 6.0)
+
+    def _show_job(self, job: JobStatus) -> None:
+        assert self.mapping is not None
+        label = html.escape(self.mapping.perceiver.label)
+        self._job_bar.visible = job.running
+        self._job_bar.value = round(100 * job.fraction, 1)
+        if job.running:
+            text = f"{html.escape(job.message)}…"
+        elif job.error:
+            text = f"<b style='color:#d62728'>failed</b>: {html.escape(job.error)}"
+        else:
+            text = html.escape(job.message)
+        self._job_md.content = f"<small>{text}<br>perception: <b>{label}</b></small>"
+
+    def _spawn_file(self, scene: Any, name: str) -> None:
+        assert self.session is not None
+        robot = self.session.robot
+        try:
+            world = objects_to_world(scene, robot.pose if robot is not None else None, self._mount())
+        except FrameError:
+            if robot is None:
+                raise NotReady from None  # robot-frame objects: wait for the robot's first pose
+            raise
+        report = self.session.spawn(world, origin=f"file {name}")
+        self.session.notify("Scene file spawned", f"{name}: {len(report.added)} new, {len(report.updated)} updated objects"
+                            + ("; " + "; ".join(report.notes) if report.notes else ""), "success")
+
+    def _bad_file(self, name: str, message: str) -> None:
+        assert self.session is not None
+        self.session.notify("Scene file ignored", f"{name}: {message}", "error")
+
+    def _mount(self) -> Any:
+        from pipeline.geometry import CameraMount
+
+        mount = getattr(self.link, "mount", None)
+        return mount if isinstance(mount, CameraMount) else CameraMount()
+
+
+def wait_until(predicate: Callable[[], bool], timeout: float, interval: float = 0.05) -> bool:
+    """Poll ``predicate`` until true or ``timeout`` [s]; returns its last value."""
+    end = time.monotonic() + timeout
+    while time.monotonic() < end:
+        if predicate():
+            return True
+        time.sleep(interval)
+    return predicate()

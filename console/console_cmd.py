@@ -1,0 +1,117 @@
+"""The ``morphonavi console`` subcommand: start the operator console in the browser."""
+
+from __future__ import annotations
+
+import argparse
+import logging
+import math
+from pathlib import Path
+
+DEFAULT_SESSION = Path(".morphonavi/session")
+DEFAULT_SCENES = Path(".morphonavi/scenes")
+
+
+def _port(text: str) -> int:
+    try:
+        v = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a TCP port number, got {text!r}") from None
+    if not 0 <= v <= 65535:
+        raise argparse.ArgumentTypeError(f"port must be within 0..65535 (0 = any free port), got {v}")
+    return v
+
+
+def _positive(text: str) -> float:
+    try:
+        v = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number in metres, got {text!r}") from None
+    if not (v > 0 and math.isfinite(v)):
+        raise argparse.ArgumentTypeError(f"expected a positive number in metres, got {text!r}")
+    return v
+
+
+def _resolution(text: str) -> float:
+    v = _positive(text)
+    if not 0.05 <= v <= 1.0:
+        raise argparse.ArgumentTypeError(f"the grid cell size must be within 0.05..1 m, got {v}")
+    return v
+
+
+def _non_negative(text: str) -> float:
+    try:
+        v = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number in metres, got {text!r}") from None
+    if not (v >= 0 and math.isfinite(v)):
+        raise argparse.ArgumentTypeError(f"expected a number >= 0 in metres, got {text!r}")
+    return v
+
+
+def add_console_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:  # type: ignore[type-arg]
+    """Register ``console`` on the ``morphonavi`` subcommand parsers; returns its parser."""
+    p = subparsers.add_parser(
+        "console",
+        help="start the operator console (digital twin in the browser)",
+        description="Start the operator console: the map, the planner and the robot in a browser tab. "
+                    "By default the simulated robot in the paper's demo room, unmapped; open the printed "
+                    "address, press 'Capture & map', click the floor to add goals.",
+    )
+    p.add_argument("--robot", default="sim", metavar="SPEC",
+                   help="robot link: 'sim' (default, the built-in simulated robot) or "
+                        "'mavlink:<connection>', e.g. mavlink:udpin:127.0.0.1:14550")
+    p.add_argument("--scene", type=Path, default=None, metavar="DIR",
+                   help=f"watched scene folder: scene JSON files dropped there are added to the map "
+                        f"(default {DEFAULT_SCENES})")
+    p.add_argument("--session", type=Path, default=DEFAULT_SESSION, metavar="DIR",
+                   help=f"session folder: the state is saved there after every change and restored at "
+                        f"start (default {DEFAULT_SESSION})")
+    p.add_argument("--fresh", action="store_true", help="start from an empty map instead of restoring the session")
+    p.add_argument("--host", default="127.0.0.1",
+                   help="interface to listen on (default 127.0.0.1: this machine only). Anything else lets "
+                        "whoever reaches the port drive the robot: there is no login")
+    p.add_argument("--port", type=_port, default=8080, help="TCP port (default 8080; the next free one if taken)")
+    p.add_argument("--models", type=Path, default=None, metavar="DIR",
+                   help="folder with the offline model weights (morphonavi models fetch); without it the "
+                        "simulated robot is mapped with ground-truth perception")
+    p.add_argument("--resolution", type=_resolution, default=0.25,
+                   help="planning grid cell size [m], 0.05..1 (default 0.25)")
+    p.add_argument("--margin", type=_non_negative, default=0.35,
+                   help="robot radius: cells this close to an obstacle are dangerous [m] (default 0.35)")
+    p.set_defaults(func=cmd_console)
+    return p
+
+
+def cmd_console(args: argparse.Namespace) -> int:
+    """Run the console until Ctrl-C."""
+    from console.cli import CliError
+
+    from .app import ConsoleApp, ConsoleConfig
+    from .session import SessionError
+
+    logging.basicConfig(level=logging.INFO, format="%(asctime)s %(levelname)s %(name)s: %(message)s",
+                        datefmt="%H:%M:%S")
+    for noisy in ("websockets", "websockets.server", "httpx"):
+        logging.getLogger(noisy).setLevel(logging.WARNING)
+    if args.models is not None and not Path(args.models).is_dir():
+        raise CliError(f"--models {args.models}: no such folder (fetch the models with: morphonavi models fetch NAME)")
+    config = ConsoleConfig(
+        robot=args.robot, scene_dir=args.scene if args.scene is not None else DEFAULT_SCENES,
+        session_dir=args.session, host=args.host, port=args.port, models=args.models, fresh=args.fresh,
+        resolution=args.resolution, margin=args.margin,
+    )
+    app = ConsoleApp(config)
+    try:
+        app.start()
+    except SessionError as exc:
+        raise CliError(str(exc)) from None
+    except Exception as exc:
+        app.stop()
+        from .link.base import LinkError
+
+        if isinstance(exc, (LinkError, OSError, ValueError)):
+            raise CliError(f"cannot start the console: {exc}") from None
+        raise
+    print(f"MorphoNavi console: open {app.url} in a browser (Ctrl-C to stop)", flush=True)
+    app.serve_forever()
+    return 0

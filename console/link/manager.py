@@ -1,0 +1,564 @@
+"""The mission manager: runs a mission segment by segment over a robot link.
+
+Like the paper's manager it switches between ground control (walking) and flight control
+(take-off, flight, landing) per segment, and reports progress. It adds what a console needs to
+stay in charge:
+
+- **geofence**: every target is checked against the mission's workspace bounds before it is sent;
+- **pause / resume / abort**: pause holds the robot and keeps the mission; resume continues the
+  interrupted segment from where the robot is now (taking off again first if a flight segment
+  finds the robot on the ground, landing first if a walk finds it in the air);
+- **failures** (a refused command, a blocked path, a time-out) pause the mission with the reason;
+  nothing is lost and resume retries;
+- **failsafe**: when the robot has not been heard from (``RobotState.link_age``) for
+  ``failsafe_after`` seconds the manager holds, waits ``failsafe_hold`` seconds for the link to
+  come back and otherwise lands where the robot is; the console is told at every step and the
+  mission stays resumable.
+
+Positions are world frame (z up) [m]; times [s]. Listeners receive :class:`MissionEvent` on the
+manager's thread and must return quickly.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import threading
+import time
+from dataclasses import dataclass, replace
+from enum import Enum
+from typing import Callable, Sequence
+
+import numpy as np
+
+from planner.mission import Mission, MissionSegment, SegmentKind
+
+from .base import LinkError, RobotLink, RobotState, RunStatus, SegmentRun
+
+log = logging.getLogger(__name__)
+
+Vec3 = tuple[float, float, float]
+
+
+class MissionStatus(str, Enum):
+    IDLE = "idle"
+    RUNNING = "running"
+    PAUSED = "paused"  # held by the operator or after a failure: resume() continues
+    FAILSAFE = "failsafe"  # link lost: holding / landing; resume() once the link is back
+    DONE = "done"
+    ABORTED = "aborted"
+
+    @property
+    def active(self) -> bool:
+        return self in (MissionStatus.RUNNING, MissionStatus.PAUSED, MissionStatus.FAILSAFE)
+
+
+class MissionStateError(RuntimeError):
+    """The operation does not fit the manager's state (resume with nothing paused ...)."""
+
+
+class GeofenceError(ValueError):
+    """A mission target lies outside the geofence; the message names segment and waypoint."""
+
+
+@dataclass(frozen=True)
+class MissionProgress:
+    """Where the mission stands.
+
+    Attributes:
+        status: Overall state.
+        mission_id: Id of the mission, ``None`` before the first.
+        segment: Index of the current (or interrupted) segment, ``None`` when none.
+        segments: Number of segments.
+        kind: Kind of the current segment.
+        control: ``ground`` (walking) or ``flight`` (take-off, flight, landing) or ``""``.
+        segment_fraction: Fraction of the current segment done, in [0, 1].
+        fraction: Fraction of the whole mission done (by path length), in [0, 1].
+        message: Latest human-readable status.
+    """
+
+    status: MissionStatus = MissionStatus.IDLE
+    mission_id: str | None = None
+    segment: int | None = None
+    segments: int = 0
+    kind: SegmentKind | None = None
+    control: str = ""
+    segment_fraction: float = 0.0
+    fraction: float = 0.0
+    message: str = ""
+
+
+@dataclass(frozen=True)
+class MissionEvent:
+    """Something the console should show: ``level`` is ``info``, ``warning``, ``error`` or
+    ``progress`` (throttled position updates)."""
+
+    time: float
+    level: str
+    message: str
+    progress: MissionProgress
+
+
+EventListener = Callable[[MissionEvent], None]
+
+
+def _control(kind: SegmentKind | None) -> str:
+    if kind is None:
+        return ""
+    return "ground" if kind is SegmentKind.WALK else "flight"
+
+
+def _seg_length(seg: MissionSegment) -> float:
+    return max(seg.length, 0.05)
+
+
+class MissionManager:
+    """Executes missions on one :class:`~console.link.base.RobotLink`.
+
+    Args:
+        link: A connected robot link.
+        failsafe_after: Robot silence that triggers the failsafe [s].
+        failsafe_hold: How long the failsafe holds before landing [s].
+        geofence_margin: Tolerance added around the mission bounds [m].
+        resume_tolerance: How far the robot may be from a segment's start [m] (the segment is
+            then started from where the robot is).
+        poll: Monitoring period [s].
+        progress_rate: Maximum rate of ``progress`` events [Hz].
+    """
+
+    def __init__(self, link: RobotLink, *, failsafe_after: float = 3.0, failsafe_hold: float = 5.0,
+                 geofence_margin: float = 0.0, resume_tolerance: float = 0.6, poll: float = 0.02,
+                 progress_rate: float = 5.0) -> None:
+        for name, v in (("failsafe_after", failsafe_after), ("failsafe_hold", failsafe_hold),
+                        ("resume_tolerance", resume_tolerance), ("poll", poll), ("progress_rate", progress_rate)):
+            if not (v > 0 and math.isfinite(v)):
+                raise ValueError(f"{name} must be a positive number of seconds/metres, got {v}")
+        if not (geofence_margin >= 0 and math.isfinite(geofence_margin)):
+            raise ValueError(f"geofence_margin must be >= 0 m, got {geofence_margin}")
+        self.link = link
+        self.failsafe_after = failsafe_after
+        self.failsafe_hold = failsafe_hold
+        self.geofence_margin = geofence_margin
+        self.resume_tolerance = resume_tolerance
+        self.poll = poll
+        self._min_progress_gap = 1.0 / progress_rate
+        self._cond = threading.Condition()
+        self._progress = MissionProgress()
+        self._listeners: list[EventListener] = []
+        self._mission: Mission | None = None
+        self._thread: threading.Thread | None = None
+        self._resume = False
+        self._abort = False
+        self._pausing = False
+        self._run: SegmentRun | None = None
+        self._segment_done = 0.0  # fraction of the current original segment done before this run
+        self._last_progress_event = 0.0
+        self._failsafe_acting = False
+        self._resume_point: int | None = None
+        self.events: list[MissionEvent] = []  # the last 200, for late listeners and tests
+
+    # --- observation -----------------------------------------------------------------------------
+    def subscribe(self, callback: EventListener) -> Callable[[], None]:
+        """Call ``callback(event)`` for every event; returns an unsubscribe function."""
+        with self._cond:
+            self._listeners.append(callback)
+
+        def unsubscribe() -> None:
+            with self._cond:
+                if callback in self._listeners:
+                    self._listeners.remove(callback)
+
+        return unsubscribe
+
+    def progress(self) -> MissionProgress:
+        with self._cond:
+            return self._progress
+
+    @property
+    def mission(self) -> Mission | None:
+        with self._cond:
+            return self._mission
+
+    def wait(self, timeout: float | None = None, until: Sequence[MissionStatus] = (
+            MissionStatus.DONE, MissionStatus.ABORTED, MissionStatus.PAUSED, MissionStatus.FAILSAFE,
+            MissionStatus.IDLE)) -> MissionStatus:
+        """Block until the status is one of ``until`` (default: anything but running)."""
+        with self._cond:
+            self._cond.wait_for(lambda: self._progress.status in until, timeout)
+            return self._progress.status
+
+    def _emit(self, level: str, message: str, **changes: object) -> None:
+        with self._cond:
+            if message and level != "progress":
+                changes.setdefault("message", message)
+            self._progress = replace(self._progress, **changes)  # type: ignore[arg-type]
+            ev = MissionEvent(time.time(), level, message, self._progress)
+            if level != "progress":
+                self.events = (self.events + [ev])[-200:]
+            listeners = list(self._listeners)
+            self._cond.notify_all()
+        if level in ("warning", "error"):
+            log.warning("mission: %s", message)
+        elif level == "info":
+            log.info("mission: %s", message)
+        for cb in listeners:
+            try:
+                cb(ev)
+            except Exception:
+                log.exception("mission event listener %r failed", cb)
+
+    # --- geofence --------------------------------------------------------------------------------
+    def check_geofence(self, mission: Mission, segments: Sequence[MissionSegment] | None = None) -> None:
+        """Raise :class:`GeofenceError` if any waypoint is outside the mission's bounds."""
+        lo = np.asarray(mission.bounds_min, dtype=np.float64) - self.geofence_margin
+        hi = np.asarray(mission.bounds_max, dtype=np.float64) + self.geofence_margin
+        for i, seg in enumerate(mission.segments if segments is None else segments):
+            for j, w in enumerate(seg.waypoints):
+                p = np.asarray(w, dtype=np.float64)
+                if not np.all(np.isfinite(p)) or np.any(p < lo - 1e-9) or np.any(p > hi + 1e-9):
+                    raise GeofenceError(
+                        f"segment {i + 1} ({seg.kind.value}) waypoint {j + 1} ({p[0]:.2f}, {p[1]:.2f}, {p[2]:.2f}) "
+                        f"is outside the geofence ({lo[0]:.2f}, {lo[1]:.2f}, {lo[2]:.2f})-"
+                        f"({hi[0]:.2f}, {hi[1]:.2f}, {hi[2]:.2f}) m")
+
+    # --- control ---------------------------------------------------------------------------------
+    def start(self, mission: Mission) -> None:
+        """Check and start a mission (returns at once).
+
+        Raises:
+            MissionStateError: Another mission is active, or the robot is not where it starts.
+            GeofenceError: A waypoint is outside the bounds.
+        """
+        self.check_geofence(mission)
+        st = self.link.latest_state()
+        if st is None:
+            raise MissionStateError("no state from the robot yet: is the link connected?")
+        if not st.link_ok:
+            raise MissionStateError(f"the robot link is not healthy ({st.health}): not starting")
+        first = mission.segments[0]
+        gap = math.dist(st.position[:2], first.start[:2])
+        if gap > self.resume_tolerance:
+            raise MissionStateError(
+                f"the mission starts at ({first.start[0]:.2f}, {first.start[1]:.2f}) but the robot is at "
+                f"({st.position[0]:.2f}, {st.position[1]:.2f}), {gap:.2f} m away: plan from the robot's position")
+        with self._cond:
+            if self._progress.status.active:
+                raise MissionStateError(f"mission {self._progress.mission_id} is {self._progress.status.value}: "
+                                        "abort it first")
+            self._mission = mission
+            self._resume = self._abort = self._pausing = False
+            self._progress = MissionProgress(MissionStatus.RUNNING, mission.id, 0, len(mission.segments),
+                                             mission.segments[0].kind)
+            self._thread = threading.Thread(target=self._work, args=(mission,), name="mission", daemon=True)
+        self._emit("info", f"mission {mission.id} started: {len(mission.segments)} segments, {mission.length:.1f} m")
+        self._thread.start()
+
+    def pause(self) -> None:
+        """Hold the robot and pause the mission (resume continues it)."""
+        with self._cond:
+            status = self._progress.status
+            if status is MissionStatus.PAUSED:
+                return
+            if status is not MissionStatus.RUNNING:
+                raise MissionStateError(f"cannot pause: the mission is {status.value}")
+            self._pausing = True
+        try:
+            self.link.hold()
+        except LinkError as exc:
+            self._emit("error", f"hold command failed: {exc}")
+            raise
+
+    def resume(self) -> None:
+        """Continue a paused mission (or one stopped by the failsafe once the link is back)."""
+        with self._cond:
+            status = self._progress.status
+            if status not in (MissionStatus.PAUSED, MissionStatus.FAILSAFE):
+                raise MissionStateError(f"cannot resume: the mission is {status.value}")
+            if self._failsafe_acting:
+                raise MissionStateError("the failsafe is still acting (holding / landing): wait for it")
+        st = self.link.latest_state()
+        if st is None or not st.link_ok or st.link_age > self.failsafe_after:
+            raise MissionStateError("cannot resume: the robot is not heard from "
+                                    f"({st.health if st else 'no state'})")
+        with self._cond:
+            self._resume = True
+            self._progress = replace(self._progress, status=MissionStatus.RUNNING, message="resuming")
+            self._cond.notify_all()
+
+    def abort(self) -> None:
+        """Stop the mission for good; the robot holds where it is."""
+        with self._cond:
+            status = self._progress.status
+            if not status.active:
+                raise MissionStateError(f"cannot abort: the mission is {status.value}")
+            self._abort = True
+            self._cond.notify_all()
+            failsafe = status is MissionStatus.FAILSAFE or self._failsafe_acting
+        if not failsafe and status is MissionStatus.RUNNING:  # never interrupt a failsafe landing
+            try:
+                self.link.abort()
+            except LinkError as exc:
+                self._emit("error", f"abort command failed: {exc}")
+        else:  # the worker is waiting (paused / failsafe): the mission ends now
+            self._emit_aborted()
+
+    def _emit_aborted(self) -> None:
+        with self._cond:
+            if self._progress.status is MissionStatus.ABORTED:
+                return
+            self._progress = replace(self._progress, status=MissionStatus.ABORTED)
+        self._emit("warning", "mission aborted", status=MissionStatus.ABORTED)
+
+    def close(self) -> None:
+        """Abort any active mission and wait for the worker."""
+        if self._progress.status.active:
+            try:
+                self.abort()
+            except MissionStateError:
+                pass
+        if self._thread is not None:
+            self._thread.join(timeout=5.0)
+
+    # --- worker ----------------------------------------------------------------------------------
+    def _work(self, mission: Mission) -> None:
+        try:
+            self._execute(mission)
+        except Exception as exc:  # never die silently
+            log.exception("mission worker failed")
+            self._emit("error", f"mission stopped by an internal error: {exc}", status=MissionStatus.ABORTED)
+
+    def _execute(self, mission: Mission) -> None:
+        segs = mission.segments
+        lengths = [_seg_length(s) for s in segs]
+        total = sum(lengths)
+        index = 0
+        next_wp: int | None = None  # waypoint to continue from after an interruption
+        resumed = False  # this segment was interrupted before
+        while index < len(segs):
+            base = sum(lengths[:index])
+            self._resume_point = next_wp
+            try:
+                pending = self._prepare(segs[index], next_wp, fresh=not resumed)
+            except LinkError as exc:
+                self._emit("error", f"segment {index + 1}/{len(segs)} cannot start: {exc}; mission paused",
+                           status=MissionStatus.PAUSED, segment=index, kind=segs[index].kind)
+                outcome = "paused"
+                pending = []
+            else:
+                if pending is None:
+                    index, next_wp, resumed = index + 1, None, False
+                    continue
+                outcome = "done"
+            for part, is_main in pending:
+                outcome = self._run_part(mission, index, part, is_main, base, lengths[index], total)
+                if outcome != "done":
+                    break
+            if outcome == "done":
+                index, next_wp, resumed = index + 1, None, False
+                continue
+            if outcome == "aborted" or not self._wait_resume():
+                self._emit_aborted()
+                return
+            next_wp, resumed = self._resume_point, True
+        self._emit("info", f"mission {mission.id} done", status=MissionStatus.DONE, fraction=1.0,
+                   segment_fraction=1.0)
+
+    def _prepare(self, seg: MissionSegment, next_wp: int | None,
+                 fresh: bool = True) -> list[tuple[MissionSegment, bool]] | None:
+        """The segment (trimmed to ``waypoints[next_wp:]`` after an interruption) plus recovery
+        steps, or None if nothing is left. A ``fresh`` segment must start where the robot is."""
+        st = self._state()
+        here = np.asarray(st.position, dtype=np.float64)
+        floor = float(self._mission.bounds_min[2]) if self._mission else 0.0
+        out: list[tuple[MissionSegment, bool]] = []
+        wps = [tuple(map(float, w)) for w in seg.waypoints]
+        k = seg.kind
+        if k in (SegmentKind.WALK, SegmentKind.FLY):
+            rest = wps[max(next_wp or 1, 1):]
+            if not rest:
+                return None
+            if k is SegmentKind.WALK and not st.landed:
+                out.append((MissionSegment(SegmentKind.LAND, (tuple(here), (here[0], here[1], floor))), False))
+                here = np.array([here[0], here[1], floor])
+            if k is SegmentKind.FLY and st.landed:
+                top = (here[0], here[1], rest[0][2])
+                out.append((MissionSegment(SegmentKind.TAKEOFF, ((here[0], here[1], floor), top)), False))
+                here = np.asarray(top)
+            start = (float(here[0]), float(here[1]), floor if k is SegmentKind.WALK else float(here[2]))
+            if fresh and math.dist(start[:2], wps[0][:2]) > self.resume_tolerance:
+                raise LinkError(f"the robot is {math.dist(start[:2], wps[0][:2]):.2f} m from the start of the "
+                                f"{k.value} segment")
+            out.append((MissionSegment(k, (start,) + tuple(rest)), True))
+        elif k is SegmentKind.TAKEOFF:
+            top = wps[1]
+            if fresh and st.landed and math.dist(here[:2], wps[0][:2]) > self.resume_tolerance:
+                raise LinkError(f"the robot is {math.dist(here[:2], wps[0][:2]):.2f} m from the take-off spot")
+            if st.landed:
+                out.append((MissionSegment(k, ((here[0], here[1], floor), (here[0], here[1], top[2]))), True))
+            else:
+                out.append((MissionSegment(SegmentKind.FLY, (tuple(here), top)), True))
+        else:  # LAND
+            above, spot = wps
+            if st.landed:
+                if math.dist(here[:2], spot[:2]) <= self.resume_tolerance:
+                    return None
+                top = (here[0], here[1], above[2])
+                out.append((MissionSegment(SegmentKind.TAKEOFF, ((here[0], here[1], floor), top)), False))
+                out.append((MissionSegment(SegmentKind.FLY, (top, above)), False))
+                out.append((MissionSegment(k, (above, spot)), True))
+            else:
+                out.append((MissionSegment(k, ((spot[0], spot[1], max(float(here[2]), spot[2])), spot)), True))
+        return out
+
+    @staticmethod
+    def _original_index(original: MissionSegment, part: MissionSegment, next_in_part: int) -> int | None:
+        """Index in the original segment of the waypoint a (trimmed) part was heading for."""
+        if part.kind is not original.kind or original.kind not in (SegmentKind.WALK, SegmentKind.FLY):
+            return None
+        # the part is (robot position,) + original.waypoints[k:]
+        k = len(original.waypoints) - (len(part.waypoints) - 1)
+        return max(1, k + max(next_in_part, 1) - 1)
+
+    def _state(self) -> RobotState:
+        st = self.link.latest_state()
+        if st is None:
+            raise LinkError("no robot state")
+        return st
+
+    def _run_part(self, mission: Mission, index: int, part: MissionSegment, is_main: bool, base: float,
+                  length: float, total: float) -> str:
+        """Run one link segment; returns ``done``, ``paused``, ``aborted`` or ``failsafe``."""
+        n = len(mission.segments)
+        with self._cond:
+            if self._abort:
+                return "aborted"
+            pausing, self._pausing = self._pausing, False
+        if pausing:  # the pause came between two segments
+            self._emit("info", f"mission paused before segment {index + 1}/{n}", status=MissionStatus.PAUSED)
+            return "paused"
+        ctl = _control(part.kind)
+        if ctl != self._progress.control:
+            self._emit("info", f"switching to {ctl} control", control=ctl)
+        what = f"segment {index + 1}/{n}: {part.kind.value}" + ("" if is_main else " (recovery)")
+        try:
+            self.check_geofence(mission, [part])
+        except GeofenceError as exc:
+            self._emit("error", f"{what} refused: {exc}", status=MissionStatus.PAUSED)
+            return "paused"
+        start_fraction = self._progress.segment_fraction if self._progress.segment == index else 0.0
+        self._emit("info", what, segment=index, kind=mission.segments[index].kind, control=ctl,
+                   segment_fraction=start_fraction, fraction=(base + start_fraction * length) / total)
+        try:
+            run = self.link.run_segment(part)
+        except LinkError as exc:
+            self._emit("error", f"{what} not started: {exc}", status=MissionStatus.PAUSED)
+            return "paused"
+        with self._cond:
+            self._run = run
+        while not run.done:
+            if self._link_lost():
+                if is_main:
+                    self._resume_point = self._original_index(mission.segments[index], part, run.next_waypoint)
+                self._failsafe()
+                return "failsafe"
+            with self._cond:
+                abort = self._abort
+            if abort:
+                run.wait(1.0)
+                break
+            if is_main:
+                frac = start_fraction + (1 - start_fraction) * run.progress
+                now = time.monotonic()
+                if now - self._last_progress_event >= self._min_progress_gap:
+                    self._last_progress_event = now
+                    self._emit("progress", "", segment_fraction=frac, fraction=(base + frac * length) / total)
+            run.wait(self.poll)
+        status = run.status
+        with self._cond:
+            aborting = self._abort
+        if aborting or status is RunStatus.ABORTED:
+            return "aborted"
+        if status is RunStatus.DONE:  # a pause that came too late is caught before the next segment
+            if is_main:
+                self._emit("progress", "", segment_fraction=1.0, fraction=(base + length) / total)
+            return "done"
+        with self._cond:
+            pausing, self._pausing = self._pausing, False
+        frac = start_fraction + (1 - start_fraction) * run.progress
+        if is_main:
+            self._resume_point = self._original_index(mission.segments[index], part, run.next_waypoint)
+        where = {"segment_fraction": frac, "fraction": (base + frac * length) / total} if is_main else {}
+        if status is RunStatus.HELD or pausing:
+            self._emit("info", f"mission paused during {what}", status=MissionStatus.PAUSED, **where)
+        else:
+            self._emit("error", f"{what} failed: {run.error}; mission paused (resume retries, abort ends it)",
+                       status=MissionStatus.PAUSED, **where)
+        return "paused"
+
+    def _link_lost(self) -> bool:
+        st = self.link.latest_state()
+        return st is not None and st.link_age > self.failsafe_after
+
+    def _wait_resume(self) -> bool:
+        """Wait (paused or after the failsafe) for resume (True) or abort (False); runs the
+        failsafe if the link dies meanwhile."""
+        while True:
+            with self._cond:
+                if self._abort:
+                    return False
+                if self._resume:
+                    self._resume = False
+                    break
+                status = self._progress.status
+                self._cond.wait(self.poll)
+            if status is not MissionStatus.FAILSAFE and self._link_lost():
+                self._failsafe()
+        self._emit("info", "mission resumed", status=MissionStatus.RUNNING)
+        return True
+
+    def _failsafe(self) -> None:
+        """Hold, wait ``failsafe_hold`` for the link, then land where the robot is."""
+        st = self.link.latest_state()
+        age = st.link_age if st else float("inf")
+        with self._cond:
+            self._failsafe_acting = True
+        try:
+            self._emit("warning", f"FAILSAFE: no heartbeat from the robot for {age:.1f} s: holding",
+                       status=MissionStatus.FAILSAFE)
+            try:
+                self.link.hold()
+            except LinkError as exc:
+                self._emit("error", f"failsafe hold not delivered: {exc}")
+            deadline = time.monotonic() + self.failsafe_hold
+            while time.monotonic() < deadline:
+                st = self.link.latest_state()
+                if st is not None and st.link_ok and st.link_age <= self.failsafe_after:
+                    self._emit("warning", "link restored during the failsafe hold: mission paused "
+                                          "(resume or abort)", status=MissionStatus.PAUSED)
+                    return
+                time.sleep(self.poll)
+            st = self.link.latest_state()
+            if st is None or st.landed:
+                self._emit("warning", "FAILSAFE: the robot is on the ground; the mission is kept "
+                                      "(resume once the link is back)")
+                return
+            self._emit("warning", f"FAILSAFE: link still lost after {self.failsafe_hold:.1f} s: landing")
+            floor = float(self._mission.bounds_min[2]) if self._mission else 0.0
+            try:
+                land = self.link.land_here(floor)
+            except LinkError as exc:
+                self._emit("error", f"FAILSAFE landing not delivered ({exc}): the autopilot's own failsafe "
+                                    "(ArduPilot FS_GCS_ENABLE) must act")
+                return
+            land.wait(max(30.0, 10 * self.failsafe_hold))
+            if land.status is RunStatus.DONE:
+                self._emit("warning", "FAILSAFE: landed; the mission is kept (resume once the link is back)")
+            else:
+                self._emit("error", f"FAILSAFE landing did not complete: {land.error or land.status.value}")
+        finally:
+            with self._cond:
+                self._failsafe_acting = False
+
+
+__all__ = ["MissionManager", "MissionStatus", "MissionProgress", "MissionEvent", "MissionStateError",
+           "GeofenceError"]

@@ -1,0 +1,573 @@
+"""The built-in simulated robot: kinematic, time-based, with a rendered camera.
+
+The robot lives in a hidden ground-truth world (default: the paper's room, see
+:mod:`console.link.world`) that the operator only learns about by mapping its photos. It walks,
+takes off, flies and lands at configurable speeds and rates, in simulated time that can run
+faster than the wall clock (``time_scale``). It never moves into a cell that an object of the
+hidden world occupies, nor out of the workspace (the safety net): such a move stops the robot
+and fails the segment with a message naming the object. Its camera renders the hidden world from
+the robot's camera pose (RGB + ground-truth depth and instance masks), or serves real photos from
+a ``--captures`` folder.
+
+Frames: world (z up) [m]; yaw about +z [rad]; the camera mount is in the robot body frame
+(x forward, y left, z up). States are published at ``SimConfig.rate`` Hz (>= 20).
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import threading
+import time
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+from typing import Sequence
+
+import numpy as np
+
+from pipeline.geometry import CameraMount, Intrinsics, Pose, camera_pose_in_world
+from pipeline.scene import Scene
+from planner.grid import CellState, PlanningGrid, Workspace, build_grid
+from planner.mission import MissionSegment, SegmentKind
+
+from .base import (CaptureResult, GroundTruth, LinkError, Mode, RobotLink, RobotState, RunStatus,
+                   SegmentRun, VisibleObject)
+from .captures import CapturesFolder
+from .render import SceneRenderer
+from .world import DEFAULT_START, ROOM_MAX, ROOM_MIN, paper_room
+
+log = logging.getLogger(__name__)
+
+Vec3 = tuple[float, float, float]
+
+DEFAULT_INTRINSICS = Intrinsics(525.0, 525.0, 319.5, 239.5, 640, 480)
+"""The simulated camera: 640 x 480, 62 degrees horizontal field of view."""
+
+DEFAULT_MOUNT = CameraMount(position=(0.15, 0.0, 0.35), pitch=0.0)
+"""Camera on the simulated robot (robot body frame), looking straight ahead."""
+
+_STEP = 0.05  # [m] longest straight move checked against the occupancy at once
+
+
+@dataclass(frozen=True)
+class SimConfig:
+    """Kinematics and timing of the simulated robot (units in the names).
+
+    Attributes:
+        walk_speed: Walking speed [m/s].
+        fly_speed: Horizontal / straight-line flight speed [m/s].
+        climb_rate: Take-off climb rate [m/s].
+        descent_rate: Landing descent rate [m/s].
+        yaw_rate: Turn rate [rad/s] (the robot turns to face where it goes).
+        spool_time: Arming to lift-off [s].
+        settle_time: Touch-down to disarmed [s].
+        rate: State publication and integration rate [Hz].
+        time_scale: Simulated seconds per wall-clock second (> 1 runs faster).
+        start_tolerance: How far a segment's first waypoint may be from the robot [m].
+        drain_idle: Battery fraction used per second standing [1/s].
+        drain_walk: ... walking [1/s].
+        drain_fly: ... in the air [1/s].
+        workspace: Bounds the robot may not leave and the occupancy resolution.
+        link_loss_hold: During a link outage the robot holds (ends its segment) after this [s].
+        link_loss_land: ... and lands where it is after this [s] (its own failsafe).
+    """
+
+    walk_speed: float = 0.4
+    fly_speed: float = 0.8
+    climb_rate: float = 0.5
+    descent_rate: float = 0.4
+    yaw_rate: float = math.radians(120.0)
+    spool_time: float = 1.0
+    settle_time: float = 0.5
+    rate: float = 50.0
+    time_scale: float = 1.0
+    start_tolerance: float = 0.3
+    drain_idle: float = 1e-5
+    drain_walk: float = 2e-4
+    drain_fly: float = 2e-3
+    workspace: Workspace = field(default_factory=Workspace)
+    link_loss_hold: float = 1.0
+    link_loss_land: float = 10.0
+
+    def __post_init__(self) -> None:
+        for name in ("walk_speed", "fly_speed", "climb_rate", "descent_rate", "yaw_rate", "time_scale",
+                     "start_tolerance"):
+            v = getattr(self, name)
+            if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
+                raise ValueError(f"SimConfig.{name} must be a positive number, got {v!r}")
+        for name in ("spool_time", "settle_time", "drain_idle", "drain_walk", "drain_fly", "link_loss_hold",
+                     "link_loss_land"):
+            v = getattr(self, name)
+            if not (isinstance(v, (int, float)) and math.isfinite(v) and v >= 0):
+                raise ValueError(f"SimConfig.{name} must be >= 0, got {v!r}")
+        if not 20.0 <= self.rate <= 1000.0:
+            raise ValueError(f"SimConfig.rate must be within 20..1000 Hz, got {self.rate}")
+
+
+@dataclass
+class _Phase:
+    """One step of a segment: ``turn``, ``move``, ``spool``, ``climb``, ``descend`` or ``settle``."""
+
+    kind: str
+    mode: Mode
+    target: Vec3 | None = None
+    yaw: float | None = None
+    speed: float = 0.0
+    duration: float = 0.0
+    waypoint: int | None = None
+
+
+def _wrap(a: float) -> float:
+    return (a + math.pi) % (2 * math.pi) - math.pi
+
+
+class SimRobot(RobotLink):
+    """A simulated aerial-ground robot in a hidden world.
+
+    Args:
+        world: The hidden ground-truth scene (world frame); default :func:`paper_room`.
+        start: ``world <- robot`` start pose (upright; only x, y, z and yaw are used).
+        config: Speeds, rates and time scale.
+        intrinsics: The camera's intrinsics (renders have this size).
+        mount: The camera on the robot (robot body frame).
+        captures: A folder of real photos to serve instead of renders (``--captures``).
+        room: Room shell drawn around the world ``(min, max)`` [m], ``None`` for none.
+        min_visible_pixels: Objects covering fewer pixels are left out of the ground truth's
+            visible list (slivers behind other objects); their mask pixels stay in ``instances``.
+        manual_clock: Do not run a clock thread: time only advances through :meth:`step`
+            (deterministic tests, or a caller that owns the clock). States are published per step.
+    """
+
+    def __init__(self, world: Scene | None = None, start: Pose = DEFAULT_START,
+                 config: SimConfig = SimConfig(), intrinsics: Intrinsics = DEFAULT_INTRINSICS,
+                 mount: CameraMount = DEFAULT_MOUNT, captures: str | Path | CapturesFolder | None = None,
+                 room: tuple[Sequence[float], Sequence[float]] | None = (ROOM_MIN, ROOM_MAX),
+                 min_visible_pixels: int = 50, manual_clock: bool = False) -> None:
+        super().__init__()
+        self.world = paper_room() if world is None else world
+        self.config = config
+        self.intrinsics = intrinsics
+        self.mount = mount
+        self.room = room
+        self.captures = (captures if isinstance(captures, CapturesFolder) or captures is None
+                         else CapturesFolder(captures))
+        self._truth: PlanningGrid = build_grid(self.world, config.workspace, margin=0.0)
+        x, y, z = (float(v) for v in start.translation)
+        self._pos = np.array([x, y, max(z, config.workspace.floor)])
+        self._yaw = start.yaw
+        self._vel = np.zeros(3)
+        self._check_free(self._pos, "the start")
+        self._floor = config.workspace.floor
+        self._landed = self._pos[2] <= self._floor + 1e-6
+        self._armed = not self._landed
+        self._battery = 1.0
+        self._sim_time = 0.0
+        self._run: SegmentRun | None = None
+        self._phases: list[_Phase] = []
+        self._progress_total = 0.0
+        self._progress_done = 0.0
+        self._link_down_until = -1.0
+        self._link_lost_at = 0.0
+        self._self_landing = False
+        self._frozen: RobotState | None = None
+        self._lock = threading.RLock()
+        self._render_lock = threading.Lock()
+        self._renderer: SceneRenderer | None = None
+        self._thread: threading.Thread | None = None
+        self._stop = threading.Event()
+        self._shots = 0
+        self.manual_clock = manual_clock
+        self.min_visible_pixels = int(min_visible_pixels)
+        self._manual_connected = False
+
+    # --- connection ------------------------------------------------------------------------------
+    @property
+    def description(self) -> str:
+        cam = f"photos from {self.captures.folder}" if self.captures else "rendered camera"
+        return f"simulated robot ({len(self.world.objects)} hidden objects, {cam})"
+
+    @property
+    def connected(self) -> bool:
+        if self.manual_clock:
+            return self._manual_connected
+        return self._thread is not None and self._thread.is_alive()
+
+    def connect(self, timeout: float = 10.0) -> None:
+        if self.connected:
+            return
+        if self.manual_clock:
+            self._manual_connected = True
+            self._stream.publish(self._state())
+            return
+        self._stop.clear()
+        self._thread = threading.Thread(target=self._loop, name="sim-robot", daemon=True)
+        self._thread.start()
+        deadline = time.monotonic() + timeout
+        while self.latest_state() is None:
+            if time.monotonic() > deadline:
+                raise LinkError("the simulated robot did not start")
+            time.sleep(0.002)
+
+    def close(self) -> None:
+        self._manual_connected = False
+        self._stop.set()
+        if self._thread is not None:
+            self._thread.join(timeout=2.0)
+        with self._lock:
+            if self._run is not None:
+                self._run.finish(RunStatus.ABORTED, "link closed")
+                self._run = None
+            self._phases = []
+
+    @property
+    def sim_time(self) -> float:
+        """Simulated time since the start [s]."""
+        with self._lock:
+            return self._sim_time
+
+    # --- faults ----------------------------------------------------------------------------------
+    def drop_link(self, duration: float) -> None:
+        """Simulate a radio outage of ``duration`` simulated seconds: the state stream freezes
+        (``link_ok`` False, ``link_age`` growing in simulated seconds), commands fail, and after
+        ``config.link_loss_hold`` the robot holds by itself."""
+        with self._lock:
+            if self._link_up():
+                self._link_lost_at = self._sim_time
+            self._link_down_until = self._sim_time + float(duration)
+
+    def _link_up(self) -> bool:
+        return self._sim_time >= self._link_down_until
+
+    def _require_link(self) -> None:
+        if not self.connected:
+            raise LinkError("the simulated robot is not connected")
+        with self._lock:
+            if not self._link_up():
+                raise LinkError(f"no link to the robot (outage for another "
+                                f"{self._link_down_until - self._sim_time:.1f} s)")
+
+    # --- main loop -------------------------------------------------------------------------------
+    def _loop(self) -> None:
+        period = 1.0 / self.config.rate
+        last = time.monotonic()
+        self._stream.publish(self._state())
+        while not self._stop.is_set():
+            now = time.monotonic()
+            dt = (now - last) * self.config.time_scale
+            last = now
+            with self._lock:
+                self._step(dt)
+                state = self._state()
+            self._stream.publish(state)
+            self._stop.wait(max(0.0, period - (time.monotonic() - now)))
+
+    def step(self, dt: float) -> None:
+        """Advance the simulation by ``dt`` simulated seconds (the clock thread calls this; with
+        ``manual_clock`` the caller does, and each call publishes a state)."""
+        if dt < 0 or not math.isfinite(dt):
+            raise ValueError(f"step: dt must be a finite number >= 0 s, got {dt}")
+        self._step(dt)
+        if self.manual_clock and self._manual_connected:
+            with self._lock:
+                state = self._state()
+            self._stream.publish(state)
+
+    def run_for(self, seconds: float, dt: float = 0.02) -> None:
+        """Manual clock: advance ``seconds`` of simulated time in steps of ``dt``."""
+        n = max(1, int(round(seconds / dt)))
+        for _ in range(n):
+            self.step(seconds / n)
+
+    def _step(self, dt: float) -> None:
+        with self._lock:
+            before = self._pos.copy()
+            self._sim_time += dt
+            left = dt
+            guard = 0
+            while left > 1e-12 and self._phases and guard < 1000:
+                left = self._advance(self._phases[0], left)
+                guard += 1
+            if not self._phases and self._run is not None:
+                self._finish(RunStatus.DONE)
+            outage = self._sim_time - self._link_lost_at if not self._link_up() else -1.0
+            if self._run is not None and outage >= self.config.link_loss_hold:
+                self._stop_motion(RunStatus.HELD, f"link lost for {outage:.1f} s: the robot holds")
+            if outage < 0:
+                self._self_landing = False
+            elif outage >= self.config.link_loss_land and not self._landed and not self._phases \
+                    and not self._self_landing:
+                self._self_landing = True  # once per outage (a blocked descent is not retried)
+                log.info("simulated robot: link lost for %.1f s, landing by itself", outage)
+                self._phases = [_Phase("descend", Mode.LANDING, target=(float(self._pos[0]), float(self._pos[1]),
+                                                                        self._floor), speed=self.config.descent_rate),
+                                _Phase("settle", Mode.LANDING, duration=self.config.settle_time)]
+            self._vel = (self._pos - before) / dt if dt > 0 else np.zeros(3)
+            mode = self._mode()
+            drain = (self.config.drain_fly if not self._landed or mode is Mode.TAKING_OFF
+                     else self.config.drain_walk if mode is Mode.WALKING else self.config.drain_idle)
+            self._battery = max(0.0, self._battery - drain * dt)
+
+    def _mode(self) -> Mode:
+        if self._phases:
+            return self._phases[0].mode
+        return Mode.IDLE if self._landed else Mode.HOLDING
+
+    def _state(self) -> RobotState:
+        now = time.time()
+        if not self._link_up():
+            if self._frozen is None:
+                self._frozen = self._live_state(now)
+            left = self._link_down_until - self._sim_time
+            return replace(self._frozen, link_ok=False, link_age=self._sim_time - self._link_lost_at,
+                           health=f"no link ({left:.1f} s of outage left)")
+        self._frozen = None
+        return self._live_state(now)
+
+    def _live_state(self, now: float) -> RobotState:
+        p, v = self._pos, self._vel
+        return RobotState(
+            time=now, position=(float(p[0]), float(p[1]), float(p[2])), yaw=float(self._yaw),
+            velocity=(float(v[0]), float(v[1]), float(v[2])), mode=self._mode(), armed=self._armed,
+            landed=self._landed, battery=self._battery, link_ok=True, link_age=0.0, health="ok",
+            autopilot_mode="SIM")
+
+    # --- motion ----------------------------------------------------------------------------------
+    def _blocker(self, p: np.ndarray) -> str | None:
+        """Why the point ``p`` is not allowed, or ``None``."""
+        ws = self.config.workspace
+        cell = ws.cell_of(p)
+        if cell is None:
+            return f"({p[0]:.2f}, {p[1]:.2f}, {p[2]:.2f}) is outside the workspace (the safety net)"
+        if self._truth.state[cell] == CellState.OCCUPIED:
+            oid = self._truth.owner_of(cell)
+            label = ""
+            if oid is not None:
+                label = f"{self.world.object(oid).label} '{oid}'"
+            return f"{label or 'an obstacle'} occupies ({p[0]:.2f}, {p[1]:.2f}, {p[2]:.2f})"
+        return None
+
+    def _check_free(self, p: np.ndarray, what: str) -> None:
+        why = self._blocker(p)
+        if why is not None:
+            raise LinkError(f"{what} is not free: {why}")
+
+    def _advance(self, ph: _Phase, dt: float) -> float:
+        """Run ``ph`` for up to ``dt`` s; returns the unused time (phase popped when done)."""
+        if ph.waypoint is not None and self._run is not None:
+            self._run.update(self._progress(), ph.waypoint)
+        if ph.kind in ("spool", "settle"):
+            used = min(dt, ph.duration)
+            ph.duration -= used
+            if ph.duration <= 1e-12:
+                self._end_phase(ph)
+            return dt - used
+        if ph.kind == "turn":
+            assert ph.yaw is not None
+            err = _wrap(ph.yaw - self._yaw)
+            need = abs(err) / self.config.yaw_rate
+            if need <= dt:
+                self._yaw = ph.yaw
+                self._phases.pop(0)
+                return dt - need
+            self._yaw = _wrap(self._yaw + math.copysign(self.config.yaw_rate * dt, err))
+            return 0.0
+        # straight motion: move, climb, descend
+        assert ph.target is not None
+        target = np.asarray(ph.target, dtype=np.float64)
+        delta = target - self._pos
+        dist = float(np.linalg.norm(delta))
+        step = min(dist, ph.speed * dt)
+        if dist > 1e-9:
+            n = max(1, int(math.ceil(step / _STEP)))
+            origin = self._pos.copy()
+            for i in range(1, n + 1):
+                p = origin + delta * (step * i / n / dist)
+                if p[2] > self._floor + 1e-6:
+                    self._landed = False
+                why = self._blocker(p)
+                if why is not None:
+                    self._fail(f"{self._verb(ph)} stopped: {why}")
+                    return 0.0
+                self._progress_done += float(np.linalg.norm(p - self._pos))
+                self._pos = p
+        if dist - step <= 1e-9:
+            self._pos = target
+            self._end_phase(ph)
+            return dt - (dist / ph.speed if ph.speed > 0 else 0.0)
+        return 0.0
+
+    @staticmethod
+    def _verb(ph: _Phase) -> str:
+        return {Mode.WALKING: "walking", Mode.FLYING: "flight", Mode.TAKING_OFF: "take-off",
+                Mode.LANDING: "landing"}.get(ph.mode, "motion")
+
+    def _end_phase(self, ph: _Phase) -> None:
+        self._phases.pop(0)
+        if ph.kind == "spool":
+            self._armed = True
+        elif ph.kind == "descend" and self._pos[2] <= self._floor + 1e-6:
+            self._landed = True
+        elif ph.kind == "settle":
+            self._armed = False
+        if self._run is not None:
+            self._run.update(self._progress())
+
+    def _progress(self) -> float:
+        return self._progress_done / self._progress_total if self._progress_total > 0 else 0.0
+
+    def _finish(self, status: RunStatus, error: str | None = None) -> None:
+        if self._run is not None:
+            self._run.finish(status, error)
+            if error:
+                log.info("segment %s: %s", status.value, error)
+        self._run = None
+        self._phases = []
+
+    def _fail(self, error: str) -> None:
+        self._finish(RunStatus.FAILED, error)
+
+    # --- commands --------------------------------------------------------------------------------
+    def run_segment(self, segment: MissionSegment) -> SegmentRun:
+        self._require_link()
+        with self._lock:
+            if self._run is not None and not self._run.done:
+                raise LinkError(f"a {self._run.segment.kind.value} segment is still running: hold or abort it first")
+            run = SegmentRun(segment)
+            try:
+                phases = self._plan(segment)
+            except LinkError as exc:
+                run.finish(RunStatus.FAILED, str(exc))
+                return run
+            self._run = run
+            self._phases = phases
+            self._progress_done = 0.0
+            self._progress_total = self._length(phases)
+            if not phases:
+                self._finish(RunStatus.DONE)
+            return run
+
+    def _length(self, phases: list[_Phase]) -> float:
+        total, p = 0.0, self._pos.copy()
+        for ph in phases:
+            if ph.target is not None:
+                q = np.asarray(ph.target)
+                total += float(np.linalg.norm(q - p))
+                p = q
+        return total
+
+    def _plan(self, seg: MissionSegment) -> list[_Phase]:
+        cfg = self.config
+        wps = [np.asarray(w, dtype=np.float64) for w in seg.waypoints]
+        here = self._pos.copy()
+        first = wps[0]
+        kind = seg.kind
+        if kind is SegmentKind.LAND and self._landed:
+            return []
+        gap = float(np.linalg.norm((first - here)[:2]))
+        if gap > cfg.start_tolerance:
+            raise LinkError(f"the {kind.value} segment starts at ({first[0]:.2f}, {first[1]:.2f}) but the robot "
+                            f"is at ({here[0]:.2f}, {here[1]:.2f}), {gap:.2f} m away")
+        if kind is SegmentKind.WALK:
+            wps = [np.array([w[0], w[1], self._floor]) for w in wps]
+        for i, w in enumerate(wps):
+            if kind is SegmentKind.TAKEOFF and i == 0:
+                w = np.array([w[0], w[1], self._floor])
+            why = None if kind is SegmentKind.LAND and i == 1 else self._blocker(w)
+            if why is not None:
+                raise LinkError(f"{kind.value} waypoint {i}: {why}")
+        phases: list[_Phase] = []
+        yaw = self._yaw
+
+        def go(points: list[np.ndarray], mode: Mode, speed: float, first_index: int) -> None:
+            nonlocal yaw
+            for i, w in enumerate(points):
+                d = w - (points[i - 1] if i else here)
+                if float(np.hypot(d[0], d[1])) > 0.05:
+                    heading = math.atan2(d[1], d[0])
+                    if abs(_wrap(heading - yaw)) > 1e-3:
+                        phases.append(_Phase("turn", mode, yaw=heading, waypoint=first_index + i))
+                        yaw = heading
+                if float(np.linalg.norm(d)) > 1e-6:
+                    phases.append(_Phase("move", mode, target=tuple(w), speed=speed, waypoint=first_index + i))
+
+        if kind is SegmentKind.WALK:
+            if not self._landed:
+                raise LinkError("cannot walk: the robot is in the air (land first)")
+            go(wps, Mode.WALKING, cfg.walk_speed, 0)
+        elif kind is SegmentKind.FLY:
+            if self._landed:
+                raise LinkError("cannot fly: the robot is on the ground (take off first)")
+            go(wps, Mode.FLYING, cfg.fly_speed, 0)
+        elif kind is SegmentKind.TAKEOFF:
+            top = wps[1]
+            if top[2] <= here[2] + 1e-6:
+                raise LinkError(f"take-off height {top[2]:.2f} m is not above the robot ({here[2]:.2f} m)")
+            if self._landed:
+                phases.append(_Phase("spool", Mode.TAKING_OFF, duration=cfg.spool_time, waypoint=1))
+            phases.append(_Phase("climb", Mode.TAKING_OFF, target=(here[0], here[1], float(top[2])),
+                                 speed=cfg.climb_rate, waypoint=1))
+            if float(np.hypot(*(top - here)[:2])) > 1e-6:
+                phases.append(_Phase("move", Mode.TAKING_OFF, target=tuple(top), speed=cfg.fly_speed, waypoint=1))
+        elif kind is SegmentKind.LAND:
+            above, spot = wps
+            if float(np.linalg.norm(above - here)) > 1e-6:
+                phases.append(_Phase("move", Mode.LANDING, target=tuple(above), speed=cfg.fly_speed, waypoint=0))
+            phases.append(_Phase("descend", Mode.LANDING, target=(float(spot[0]), float(spot[1]), self._floor),
+                                 speed=cfg.descent_rate, waypoint=1))
+            phases.append(_Phase("settle", Mode.LANDING, duration=cfg.settle_time, waypoint=1))
+        return phases
+
+    def hold(self) -> None:
+        self._require_link()
+        with self._lock:
+            self._stop_motion(RunStatus.HELD, "held by the operator")
+            self._vel = np.zeros(3)
+            state = self._state()
+        self._stream.publish(state)  # the stream shows the stop at once, not a tick later
+
+    def abort(self) -> None:
+        self._require_link()
+        with self._lock:
+            self._stop_motion(RunStatus.ABORTED, "aborted by the operator")
+            self._vel = np.zeros(3)
+            state = self._state()
+        self._stream.publish(state)
+
+    def _stop_motion(self, status: RunStatus, why: str) -> None:
+        if self._phases and self._phases[0].kind == "spool":
+            self._armed = False  # never lifted off
+        if self._landed and self._phases and self._phases[0].kind == "settle":
+            self._armed = False
+        self._finish(status, why)
+
+    # --- camera ----------------------------------------------------------------------------------
+    def capture(self) -> CaptureResult:
+        self._require_link()
+        with self._lock:
+            robot = Pose.from_xyz_yaw(*map(float, self._pos), yaw=float(self._yaw))
+        camera = camera_pose_in_world(robot, self.mount)
+        self._shots += 1
+        if self.captures is not None:
+            photo = self.captures.next()
+            return CaptureResult(photo.image, photo.intrinsics, camera, robot, self.mount, time.time(),
+                                 "captures-folder", photo.name, photo.ground_truth)
+        with self._render_lock:
+            if self._renderer is None:
+                self._renderer = SceneRenderer(self.world, self.room)
+            r = self._renderer.render(camera, self.intrinsics)
+        visible = []
+        H, W = r.instances.shape
+        ids, counts = np.unique(r.instances, return_counts=True)
+        for idx, count in zip(ids, counts):
+            if idx < 0 or count < self.min_visible_pixels:
+                continue
+            vs, us = np.nonzero(r.instances == idx)
+            box = (float(us.min()), float(vs.min()), float(us.max() + 1), float(vs.max() + 1))
+            cut = box[0] <= 0 or box[1] <= 0 or box[2] >= W or box[3] >= H
+            visible.append(VisibleObject(int(idx), r.object_ids[idx], r.labels[idx], box, int(count), cut))
+        truth = GroundTruth(self.world.objects, tuple(visible), r.depth, r.instances)
+        return CaptureResult(r.rgb, self.intrinsics, camera, robot, self.mount, time.time(), "sim-render",
+                             f"render-{self._shots:04d}", truth)
+
+
+__all__ = ["SimRobot", "SimConfig", "DEFAULT_INTRINSICS", "DEFAULT_MOUNT"]

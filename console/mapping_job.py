@@ -1,0 +1,287 @@
+"""Capture & map, off the UI thread: photo + pose from the robot -> perception -> spawned objects.
+
+One job runs at a time. Its stages report progress to the session (``JobStatus``), so every tab
+shows the same progress bar; the outcome (or the error) is announced as a notice. The session then
+holds the new capture (photo, detections, depth, camera pose), the merged world-frame objects, the
+rebuilt grid and the replanned candidate.
+
+The robot side is a :data:`TakePhoto` callable (the link's ``capture``, returning a
+:class:`~console.link.base.CaptureResult`) and the pipeline side a :class:`Perceiver`, so the job
+works with any link (simulated or MAVLink) and any perception backend (offline models, or the
+simulator's ground truth when no model weights are installed).
+"""
+
+from __future__ import annotations
+
+import logging
+import threading
+import time
+import uuid
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Callable, Protocol
+
+import numpy as np
+
+from pipeline.scene import Scene
+
+from .link.base import CaptureResult
+
+from .session import CaptureRecord, Detection, JobStatus, Session
+
+log = logging.getLogger(__name__)
+
+JOB_NAME = "Capture & map"
+
+
+@dataclass(frozen=True)
+class Perception:
+    """What the pipeline made of a shot.
+
+    Attributes:
+        scene: Objects in the world frame (and the capture record).
+        detections: Boxes in the photo, for display.
+        depth: Depth along the optical axis [m] (H x W), or ``None``.
+        timings: Wall time per stage [s].
+    """
+
+    scene: Scene
+    detections: tuple[Detection, ...] = ()
+    depth: np.ndarray | None = None
+    timings: dict[str, float] = field(default_factory=dict)
+
+
+Progress = Callable[[float, str], None]
+"""``progress(fraction in [0, 1], stage text)``."""
+
+TakePhoto = Callable[[], CaptureResult]
+
+
+class Perceiver(Protocol):
+    """A perception backend: photo -> world-frame objects."""
+
+    label: str
+    """Shown to the operator (e.g. ``ground truth (simulator; no model weights)``)."""
+
+    def perceive(self, shot: CaptureResult, capture_id: str, progress: Progress) -> Perception:
+        """Objects of ``shot`` in the world frame; ``capture_id`` goes into their ``source``."""
+        ...
+
+
+def capture_id(shot: CaptureResult) -> str:
+    """A capture id for the session: the photo's name when it has one, else a fresh id."""
+    stem = "".join(c if c.isalnum() or c in "-_" else "_" for c in (shot.name or ""))[:40]
+    return f"cap-{stem}-{uuid.uuid4().hex[:4]}" if stem else f"cap-{uuid.uuid4().hex[:8]}"
+
+
+class MappingError(RuntimeError):
+    """Capture or perception failed; the message is for the operator."""
+
+
+class MappingJob:
+    """Runs :data:`TakePhoto` -> :class:`Perceiver` -> ``session.spawn`` in a worker thread.
+
+    Args:
+        session: Where progress and results go.
+        take_photo: Asks the robot for a photo and its pose (blocking).
+        perceiver: The perception backend.
+    """
+
+    def __init__(self, session: Session, take_photo: TakePhoto, perceiver: Perceiver) -> None:
+        self._session = session
+        self._take_photo = take_photo
+        self.perceiver = perceiver
+        self._lock = threading.Lock()
+        self._thread: threading.Thread | None = None
+
+    @property
+    def running(self) -> bool:
+        with self._lock:
+            return self._thread is not None and self._thread.is_alive()
+
+    def start(self) -> bool:
+        """Start a run in the background; ``False`` if one is already running."""
+        with self._lock:
+            if self._thread is not None and self._thread.is_alive():
+                return False
+            self._thread = threading.Thread(target=self.run, name="mapping-job", daemon=True)
+            self._thread.start()
+            return True
+
+    def wait(self, timeout: float | None = None) -> bool:
+        """Wait for the current run; ``True`` if none is running any more."""
+        with self._lock:
+            t = self._thread
+        if t is not None:
+            t.join(timeout)
+            return not t.is_alive()
+        return True
+
+    def _report(self, fraction: float, message: str) -> None:
+        self._session.set_job(JobStatus(JOB_NAME, True, max(0.0, min(1.0, fraction)), message))
+
+    def run(self) -> bool:
+        """One capture-and-map cycle in the calling thread; ``True`` on success."""
+        t0 = time.perf_counter()
+        try:
+            self._report(0.02, "asking the robot for a photo")
+            try:
+                shot = self._take_photo()
+            except MappingError:
+                raise
+            except Exception as exc:  # the link's errors, whatever their type
+                raise MappingError(f"the robot did not deliver a photo: {exc}") from exc
+            t_capture = time.perf_counter() - t0
+            self._report(0.15, f"photo {shot.image.shape[1]}x{shot.image.shape[0]} received; "
+                               f"perception: {self.perceiver.label}")
+
+            def sub(f: float, text: str) -> None:
+                self._report(0.15 + 0.7 * max(0.0, min(1.0, f)), text)
+
+            cap_id = capture_id(shot)
+            try:
+                result = self.perceiver.perceive(shot, cap_id, sub)
+            except MappingError:
+                raise
+            except Exception as exc:
+                log.exception("perception failed")
+                raise MappingError(f"perception ({self.perceiver.label}) failed: {exc}") from exc
+            n = len(result.scene.objects)
+            self._report(0.88, f"spawning {n} objects, rebuilding the grid, replanning")
+            timings = {"capture": t_capture, **result.timings}
+            self._session.set_capture(CaptureRecord(
+                id=cap_id, image=shot.image, intrinsics=shot.intrinsics, camera_pose=shot.camera_pose,
+                robot_pose=shot.robot_pose, detections=result.detections, depth=result.depth,
+                backend=self.perceiver.label, timings=timings, timestamp=shot.timestamp,
+            ))
+            report = self._session.spawn(result.scene, origin=f"capture {cap_id}")
+            dt = time.perf_counter() - t0
+            summary = (f"{n} objects seen ({len(report.added)} new, {len(report.updated)} updated) "
+                       f"in {dt:.1f} s")
+            self._session.set_job(JobStatus(JOB_NAME, False, 1.0, summary))
+            body = summary + ("; " + "; ".join(report.notes) if report.notes else "")
+            self._session.notify("Mapped", body, "success")
+            return True
+        except MappingError as exc:
+            self._session.set_job(JobStatus(JOB_NAME, False, 0.0, "failed", str(exc)))
+            self._session.notify("Capture & map failed", str(exc), "error")
+            return False
+        except Exception as exc:  # a bug: report it, keep the console alive
+            log.exception("mapping job crashed")
+            self._session.set_job(JobStatus(JOB_NAME, False, 0.0, "failed", repr(exc)))
+            self._session.notify("Capture & map failed", f"internal error: {exc!r}", "error")
+            return False
+
+
+# --- perception backends ----------------------------------------------------------------------------
+
+GROUND_TRUTH_LABEL = "ground truth (simulator render; no model weights)"
+
+
+class MapperPerceiver:
+    """The mapping pipeline (:class:`pipeline.mapper.Mapper`) on a model bundle.
+
+    Args:
+        label: Shown to the operator.
+        bundle_for: Builds the detector / segmenter / depth bundle for a shot (the offline models,
+            loaded once, or the ground truth of a simulator render); raises :class:`MappingError`
+            with an operator-facing message when it cannot.
+    """
+
+    def __init__(self, label: str, bundle_for: Callable[[CaptureResult], Any]) -> None:
+        self.label = label
+        self._bundle_for = bundle_for
+        self._catalog: Any = None
+
+    def perceive(self, shot: CaptureResult, capture_id: str, progress: Progress) -> Perception:
+        from pipeline.catalog import default_catalog
+        from pipeline.mapper import Mapper
+
+        progress(0.0, f"preparing {self.label}")
+        bundle = self._bundle_for(shot)
+        if self._catalog is None:
+            self._catalog = default_catalog()
+        progress(0.1, "detecting, segmenting and estimating depth")
+        with Mapper(bundle, self._catalog) as mapper:
+            res = mapper.run(shot.image, shot.intrinsics, shot.mount, shot.robot_pose, capture_id=capture_id,
+                             image_name=shot.name or None)
+        progress(1.0, f"{len(res.scene.objects)} objects placed")
+        dets = tuple(
+            Detection(m.detection.label, float(m.detection.score), tuple(m.detection.box), m.object_id)  # type: ignore[arg-type]
+            for m in res.objects
+        )
+        depth = None
+        if res.depth is not None:
+            values = np.asarray(res.depth.values, dtype=np.float64)
+            if res.depth_scale is not None:
+                depth = np.asarray(res.depth_scale.to_metric(values), dtype=np.float32)
+            elif res.depth.kind == "metric":
+                depth = np.where(values > 0, values, np.nan).astype(np.float32)
+        return Perception(res.scene, dets, depth, dict(res.timings))
+
+
+def ground_truth_bundle_for(shot: CaptureResult) -> Any:
+    """The ground-truth perception bundle of a simulator render (boxes, masks, depth)."""
+    from pipeline.ground_truth import ground_truth_bundle
+
+    gt = shot.ground_truth
+    if gt is None:
+        raise MappingError("this photo carries no ground truth; start the console with --models DIR "
+                           "to map it with the offline models")
+    masks = None
+    if gt.instances is not None and gt.visible:
+        masks = [gt.instances == v.index for v in gt.visible]
+    return ground_truth_bundle([v.bbox for v in gt.visible], [v.label for v in gt.visible], masks, gt.depth)
+
+
+class OfflineModels:
+    """The offline model set, loaded on first use (in the mapping thread) and kept."""
+
+    def __init__(self, model_dir: Path | None) -> None:
+        self.model_dir = model_dir
+        self._bundle: Any = None
+        self._lock = threading.Lock()
+
+    def __call__(self, shot: CaptureResult) -> Any:
+        from pipeline.models.base import ModelError
+        from pipeline.models.loader import load_models
+
+        with self._lock:
+            if self._bundle is None:
+                try:
+                    self._bundle = load_models("offline", self.model_dir)
+                except ModelError as exc:  # ModelMissingError names `morphonavi models fetch NAME`
+                    raise MappingError(str(exc)) from None
+            return self._bundle
+
+
+def missing_offline_models(model_dir: Path | None) -> list[str]:
+    """Registry names of the offline set's models not found (in ``model_dir`` or the default places)."""
+    from pipeline.models.registry import locate, set_members
+
+    return [n for n in set_members("offline") if locate(n, model_dir) is None]
+
+
+def choose_perceiver(link: Any, model_dir: Path | None) -> Perceiver:
+    """The perception backend for a link.
+
+    With ``model_dir`` the offline models are used (a simulator falls back to its ground truth,
+    labelled so, when they are missing). Without it, a simulator maps its renders with ground-truth
+    perception, and a real robot uses the offline models from the default model folders.
+    """
+    from .link.sim import SimRobot
+
+    simulated = isinstance(link, SimRobot)
+    if model_dir is None and simulated:
+        return MapperPerceiver(GROUND_TRUTH_LABEL, ground_truth_bundle_for)
+    missing = missing_offline_models(model_dir)
+    where = str(model_dir) if model_dir is not None else "the default model folders"
+    if missing and simulated:
+        log.warning("offline models %s missing in %s: the simulator's ground truth is used instead "
+                    "(fetch them with: morphonavi models fetch %s)", ", ".join(missing), where, " ".join(missing))
+        return MapperPerceiver(f"ground truth (simulator render; models {', '.join(missing)} missing in {where})",
+                               ground_truth_bundle_for)
+    if missing:
+        log.warning("offline models %s missing in %s: Capture & map will fail until they are fetched",
+                    ", ".join(missing), where)
+    return MapperPerceiver(f"offline models (YOLOX-Nano, MobileSAM, FastDepth) from {where}", OfflineModels(model_dir))

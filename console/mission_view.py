@@ -1,0 +1,203 @@
+"""The mission panel: build the mission, its segment list, Execute / Pause / Resume / Abort, progress.
+
+Execution goes through a :class:`MissionRunner` (the robot link's mission manager), which runs in
+its own thread and reports back through ``Session.set_run``; this view only turns button presses
+into calls and draws the reported status.
+"""
+
+from __future__ import annotations
+
+import html
+import threading
+from typing import Any, Protocol
+
+import viser
+
+from planner.mission import Mission, SegmentKind
+
+from .paths_view import KIND_RGB
+from .session import MISSION, RUN, RunStatus, Session, SessionError
+
+
+class MissionRunner(Protocol):
+    """Drives the robot through a mission without blocking the caller."""
+
+    def execute(self, mission: Mission) -> None: ...
+
+    def pause(self) -> None: ...
+
+    def resume(self) -> None: ...
+
+    def abort(self) -> None: ...
+
+
+def segment_table(mission: Mission, current: int | None = None) -> str:
+    """The mission as a Markdown table (HTML colour chips), the running segment in bold."""
+    rows = ["| # | type | from → to [m] | length |", "|---|---|---|---|"]
+    for i, s in enumerate(mission.segments):
+        a, b = s.start, s.end
+        chip = (f"<span style='display:inline-block;width:0.7em;height:0.7em;border-radius:2px;"
+                f"background:rgb{KIND_RGB[s.kind]};margin-right:0.3em'></span>")
+        kind = s.kind.value if s.kind is not SegmentKind.TAKEOFF else "take-off"
+        row = (f"| {i + 1} | {chip}{kind} | ({a[0]:.1f}, {a[1]:.1f}, {a[2]:.1f}) → "
+               f"({b[0]:.1f}, {b[1]:.1f}, {b[2]:.1f}) | {s.length:.2f} m |")
+        if current == i:
+            row = row.replace(f"| {i + 1} |", f"| ▶ **{i + 1}** |", 1)
+        rows.append(row)
+    rows.append(f"\n<small>mission <code>{html.escape(mission.id)}</code>: {len(mission.segments)} segments, "
+                f"{mission.length:.2f} m</small>")
+    return "\n".join(rows)
+
+
+class MissionView:
+    """Mission building, listing and execution controls.
+
+    Args:
+        server: The viser server.
+        session: The state it shows and edits.
+        runner: The mission manager driving the robot (``None``: execution unavailable).
+    """
+
+    def __init__(self, server: viser.ViserServer, session: Session, runner: MissionRunner | None) -> None:
+        self._server = server
+        self._session = session
+        self._runner = runner
+        self._lock = threading.Lock()
+        gui = server.gui
+        build = gui.add_button("Build mission", icon=viser.Icon.ROUTE,
+                               hint="Split the green path into walk / take-off / fly / land segments")
+        self._table = gui.add_markdown("<small>No mission yet: register a path, then Build mission.</small>")
+        self._execute = gui.add_button("Execute", color="green", icon=viser.Icon.PLAYER_PLAY, disabled=True)
+        self._pause = gui.add_button("Pause", color="yellow", icon=viser.Icon.PLAYER_PAUSE, disabled=True, visible=False)
+        self._resume = gui.add_button("Resume", color="teal", icon=viser.Icon.PLAYER_PLAY, disabled=True, visible=False)
+        self._abort = gui.add_button("Abort", color="red", icon=viser.Icon.PLAYER_STOP, disabled=True, visible=False)
+        self._progress = gui.add_progress_bar(0.0, visible=False, color="green")
+        self._status = gui.add_markdown("")
+        build.on_click(self._on_build)
+        self._execute.on_click(self._on_execute)
+        self._pause.on_click(lambda e: self._call(e, "pause"))
+        self._resume.on_click(lambda e: self._call(e, "resume"))
+        self._abort.on_click(lambda e: self._call(e, "abort"))
+        session.subscribe(self._on_event)
+        self.refresh()
+
+    def _on_event(self, topic: str, _payload: Any) -> None:
+        if topic in (MISSION, RUN):
+            self.refresh()
+
+    @staticmethod
+    def _tell(event: Any, title: str, body: str, color: str) -> None:
+        if event.client is not None:
+            event.client.add_notification(title, body, color=color, auto_close_seconds=6.0)
+
+    def _on_build(self, event: Any) -> None:
+        try:
+            mission = self._session.build_mission()
+        except SessionError as exc:
+            self._tell(event, "No mission", str(exc), "yellow")
+            return
+        kinds = " → ".join(mission.kinds())
+        self._tell(event, "Mission built", f"{len(mission.segments)} segments: {kinds}", "green")
+
+    def _on_execute(self, event: Any) -> None:
+        mission = self._session.mission
+        if mission is None:
+            self._tell(event, "No mission", "build the mission first", "yellow")
+            return
+        if self._runner is None:
+            self._tell(event, "Cannot execute", "this robot link has no mission manager", "red")
+            return
+        if self._session.run.active:
+            self._tell(event, "Already running", "pause or abort the running mission first", "yellow")
+            return
+        try:
+            self._runner.execute(mission)
+        except Exception as exc:  # the link refuses (not armed, link down, geofence ...)
+            self._tell(event, "Cannot execute", str(exc), "red")
+
+    def _call(self, event: Any, what: str) -> None:
+        if self._runner is None:
+            return
+        try:
+            getattr(self._runner, what)()
+        except Exception as exc:
+            self._tell(event, f"Cannot {what}", str(exc), "red")
+
+    def refresh(self) -> None:
+        """Redraw the segment list, buttons and progress from the session."""
+        with self._lock:
+            mission = self._session.mission
+            run: RunStatus = self._session.run
+            if mission is None:
+                self._table.content = "<small>No mission yet: register a path, then <b>Build mission</b>.</small>"
+            else:
+                self._table.content = segment_table(mission, run.segment if run.active else None)
+            can_run = self._runner is not None
+            self._execute.visible = not run.active
+            self._execute.disabled = not (can_run and mission is not None)
+            self._pause.visible = run.state == "running"
+            self._pause.disabled = run.state != "running"
+            self._resume.visible = run.state in ("paused", "failsafe")
+            self._resume.disabled = run.state not in ("paused", "failsafe")
+            self._abort.visible = run.active
+            self._abort.disabled = not run.active
+            self._progress.visible = run.state != "idle"
+            self._progress.value = round(100.0 * max(0.0, min(1.0, run.fraction)), 1)
+            self._progress.animated = run.state == "running"
+            colors = {"done": "green", "aborted": "gray", "failed": "red", "paused": "yellow", "failsafe": "red"}
+            self._progress.color = colors.get(run.state, "blue")
+            self._status.content = (f"<small><b>{html.escape(run.state)}</b>"
+                                    f"{' · ' + html.escape(run.message) if run.message else ''}</small>"
+                                    if run.state != "idle" else "")
+
+
+class ManagerRunner:
+    """:class:`MissionRunner` over the link's :class:`~console.link.manager.MissionManager`.
+
+    Forwards the manager's events to the session (``set_run``; warnings and errors as notices to
+    every operator). When a mission completes, the executed route is retired so the next goals
+    are planned from where the robot now stands.
+    """
+
+    def __init__(self, manager: Any, session: Session) -> None:
+        self.manager = manager
+        self._session = session
+        self._last_state = ""
+        self.unsubscribe = manager.subscribe(self._on_event)
+
+    def execute(self, mission: Mission) -> None:
+        self.manager.start(mission)
+
+    def pause(self) -> None:
+        self.manager.pause()
+
+    def resume(self) -> None:
+        self.manager.resume()
+
+    def abort(self) -> None:
+        self.manager.abort()
+
+    def close(self) -> None:
+        self.unsubscribe()
+        self.manager.close()
+
+    def _on_event(self, event: Any) -> None:
+        p = event.progress
+        state = getattr(p.status, "value", str(p.status))
+        self._session.set_run(RunStatus(state, p.segment, float(p.fraction), event.message or p.message))
+        if event.level in ("warning", "error"):
+            self._session.notify("Mission", event.message, event.level)
+        if state != self._last_state:
+            self._last_state = state
+            if state == "done":
+                self._session.complete_mission()
+                self._session.notify("Mission done", "the route now starts where the robot stands", "success")
+
+
+def make_runner(link: Any, session: Session) -> MissionRunner | None:
+    """The mission manager for ``link``, reporting to ``session``; ``None`` if unavailable."""
+    try:
+        from .link.manager import MissionManager
+    except ImportError:
+        return None
+    return ManagerRunner(MissionManager(link), session)

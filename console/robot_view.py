@@ -1,0 +1,123 @@
+"""The robot's digital twin at its live pose, and its status line.
+
+The twin is a low-poly aerial-ground robot (body, four arms with rotors, four legs, a camera at
+the front), modelled in the robot body frame (x forward, y left, z up; origin on the floor under
+the body centre) and moved to the reported ``world <- robot`` pose on every state update.
+"""
+
+from __future__ import annotations
+
+import html
+import math
+import threading
+import time
+from typing import Any
+
+import numpy as np
+import trimesh
+import viser
+
+from .session import ROBOT, RobotSnapshot, Session
+
+BODY_RGB = (60, 66, 78)
+ARM_RGB = (110, 118, 130)
+ROTOR_RGB = (0, 170, 220)
+LEG_RGB = (230, 120, 30)
+CAMERA_RGB = (20, 20, 24)
+MIN_INTERVAL = 0.05  # at most 20 pose updates per second [s]
+
+
+def _colored(mesh: trimesh.Trimesh, rgb: tuple[int, int, int]) -> trimesh.Trimesh:
+    mesh.visual.face_colors = np.tile([*rgb, 255], (len(mesh.faces), 1))
+    return mesh
+
+
+def robot_mesh() -> trimesh.Trimesh:
+    """The twin in the robot body frame (x forward, y left, z up) [m], origin on the floor."""
+    parts: list[trimesh.Trimesh] = []
+    body_z = 0.30
+    parts.append(_colored(trimesh.creation.box((0.34, 0.26, 0.10)), BODY_RGB))
+    parts[-1].apply_translation((0.0, 0.0, body_z))
+    for sx, sy in ((1, 1), (1, -1), (-1, 1), (-1, -1)):
+        ang = math.atan2(sy, sx)
+        tip = np.array([0.30 * math.cos(ang), 0.30 * math.sin(ang), body_z + 0.04])
+        arm = _colored(trimesh.creation.box((0.30, 0.035, 0.025)), ARM_RGB)
+        arm.apply_transform(trimesh.transformations.rotation_matrix(ang, (0, 0, 1)))
+        arm.apply_translation(tip / 2 + (0, 0, body_z / 2 + 0.02))
+        parts.append(arm)
+        rotor = _colored(trimesh.creation.cylinder(radius=0.12, height=0.012, sections=24), ROTOR_RGB)
+        rotor.apply_translation(tip + (0, 0, 0.03))
+        parts.append(rotor)
+        leg = _colored(trimesh.creation.cylinder(radius=0.018, segment=[tip * (1, 1, 0) + (0, 0, body_z),
+                                                                         tip * (0.85, 0.85, 0)]), LEG_RGB)
+        parts.append(leg)
+        foot = _colored(trimesh.creation.icosphere(subdivisions=1, radius=0.028), LEG_RGB)
+        foot.apply_translation(tip * (0.85, 0.85, 0) + (0, 0, 0.028))
+        parts.append(foot)
+    cam = _colored(trimesh.creation.box((0.05, 0.08, 0.06)), CAMERA_RGB)
+    cam.apply_translation((0.195, 0.0, body_z))
+    parts.append(cam)
+    nose = _colored(trimesh.creation.cone(radius=0.04, height=0.09, sections=16), ROTOR_RGB)
+    nose.apply_transform(trimesh.transformations.rotation_matrix(math.pi / 2, (0, 1, 0)))
+    nose.apply_translation((0.23, 0.0, body_z + 0.07))
+    parts.append(nose)
+    return trimesh.util.concatenate(parts)
+
+
+def status_text(r: RobotSnapshot | None, link_name: str) -> str:
+    """One status line for the panel (HTML)."""
+    if r is None:
+        return f"<small>robot <b>{html.escape(link_name)}</b>: waiting for the first state…</small>"
+    x, y, z = r.pose.translation
+    health = "<b style='color:#2a9d4b'>link ok</b>" if r.healthy else "<b style='color:#d62728'>LINK LOST</b>"
+    battery = "battery ?" if r.battery is None else f"battery {100 * r.battery:.0f}%"
+    armed = "armed" if r.armed else "disarmed"
+    age = time.time() - r.stamp
+    stale = f" · <b style='color:#d62728'>{age:.0f} s old</b>" if age > 2.0 else ""
+    detail = f"<br>{html.escape(r.detail)}" if r.detail else ""
+    return (f"<small>robot <b>{html.escape(link_name)}</b> · {health} · {html.escape(r.mode)} · {armed} · "
+            f"{battery}{stale}<br>pose ({x:.2f}, {y:.2f}, {z:.2f}) m, yaw {math.degrees(r.pose.yaw):.0f}°"
+            f"{detail}</small>")
+
+
+class RobotView:
+    """The twin in the 3D view and the robot status line in the panel.
+
+    Args:
+        server: The viser server.
+        session: The state it shows.
+        link_name: How the robot link is called (``sim``, ``mavlink:...``).
+    """
+
+    def __init__(self, server: viser.ViserServer, session: Session, link_name: str) -> None:
+        self._server = server
+        self._session = session
+        self._link_name = link_name
+        self._lock = threading.Lock()
+        self._last = 0.0
+        self._status = server.gui.add_markdown(status_text(None, link_name))
+        self._frame = server.scene.add_frame("/robot", show_axes=False, visible=False)
+        server.scene.add_mesh_trimesh("/robot/twin", robot_mesh())
+        self._label = server.scene.add_label("/robot/label", "robot", position=(0.0, 0.0, 0.55),
+                                             anchor="bottom-center", font_screen_scale=0.8)
+        session.subscribe(self._on_event)
+        if session.robot is not None:
+            self.show(session.robot)
+
+    def _on_event(self, topic: str, payload: Any) -> None:
+        if topic == ROBOT and payload is not None:
+            self.show(payload)
+
+    def show(self, r: RobotSnapshot, force: bool = False) -> None:
+        """Move the twin to ``r.pose`` (throttled) and refresh the status line."""
+        now = time.monotonic()
+        with self._lock:
+            if not force and now - self._last < MIN_INTERVAL:
+                return
+            self._last = now
+            q = r.pose.quaternion  # x, y, z, w
+            self._frame.position = r.pose.translation
+            self._frame.wxyz = (q[3], q[0], q[1], q[2])
+            self._frame.visible = True
+            self._label.text = f"robot · {r.mode}" + ("" if r.healthy else " · LINK LOST")
+            self._status.content = status_text(r, self._link_name)

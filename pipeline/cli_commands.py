@@ -1,0 +1,187 @@
+"""The ``morphonavi map`` and ``morphonavi bench`` subcommands (registered by ``console/cli.py``).
+
+``add_map_parser(subparsers)`` and ``add_bench_parser(subparsers)`` add the subcommands with their
+``func`` callbacks. Failures the user can fix (bad image, camera file, pose, prompts, missing models,
+malformed dataset) print ``morphonavi <command>: error: ...`` and return status 2; nothing is written
+unless mapping succeeded (the scene file is written atomically).
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+from typing import Any, Callable
+
+from pipeline.catalog import Catalog, CatalogError
+from pipeline.mapper import MapperConfig, load_mapping_models
+
+__all__ = ["add_bench_parser", "add_map_parser", "cmd_bench", "cmd_map", "load_mapping_models"]
+
+
+class _UserError(Exception):
+    """A failure to report without a traceback."""
+
+
+def _config(args: argparse.Namespace) -> MapperConfig:
+    return MapperConfig(
+        w_geometric=args.w_geometric,
+        w_depth=args.w_depth,
+        placement=args.placement,
+        segment=args.segment,
+        fusion=args.fusion,
+    )
+
+
+def _add_common(p: argparse.ArgumentParser) -> None:
+    g = p.add_argument_group("models and mapping")
+    g.add_argument("--models", default="offline", metavar="SET",
+                   help="model set: offline (YOLOX-Nano, MobileSAM, FastDepth; default), default (OWLv2, MobileSAM, "
+                        "Depth Anything V2) or cloud")
+    g.add_argument("--model-dir", type=Path, default=None, help="models directory (default: $MORPHONAVI_MODELS or the user cache)")
+    g.add_argument("--catalog", type=Path, default=None, help="catalog TOML (default: the packaged one)")
+    g.add_argument("--threads", type=int, default=None,
+                   help="onnxruntime threads per model (default: 1 for YOLOX-Nano and FastDepth, every core for the rest)")
+    g.add_argument("--placement", choices=("box_fit", "ray"), default="box_fit",
+                   help="box_fit: fit the 3D box to the 2D box under gravity (default); ray: the paper's f*h/h_px")
+    g.add_argument("--fusion", choices=("adaptive", "fixed"), default="adaptive",
+                   help="adaptive: weigh the depth map by its agreement with the size priors on the image and drop "
+                        "depth readings that contradict them (default); fixed: the --w-* weights (the paper)")
+    g.add_argument("--w-geometric", type=float, default=0.8, help="fusion weight of the size-prior distance (0.8)")
+    g.add_argument("--w-depth", type=float, default=0.2, help="fusion weight of the depth-map distance (0.2)")
+    g.add_argument("--segment", choices=("all", "auto", "none"), default="all",
+                   help="all: segment every detection (default); auto: only those whose distance needs the mask "
+                        "(unknown size, or cut on both axes), skipping the 1-2 s encoder otherwise; none: boxes only")
+
+
+def _run(fn: Callable[[argparse.Namespace], int], command: str) -> Callable[[argparse.Namespace], int]:
+    def wrapper(args: argparse.Namespace) -> int:
+        from pipeline.geometry import CameraError
+        from pipeline.image_io import ImageError
+        from pipeline.mapper import MapperError
+        from pipeline.models.base import ModelError
+        from pipeline.scene import SceneError
+        from pipeline.bench import BenchError
+
+        try:
+            return fn(args)
+        except (_UserError, CameraError, ImageError, MapperError, ModelError, SceneError, BenchError, CatalogError,
+                OSError) as exc:
+            print(f"morphonavi {command}: error: {exc}", file=sys.stderr)
+            return 2
+
+    return wrapper
+
+
+def _catalog(args: argparse.Namespace) -> Catalog:
+    return Catalog.load(args.catalog) if args.catalog else Catalog.load()
+
+
+# --- map -------------------------------------------------------------------------------------------
+
+
+def cmd_map(args: argparse.Namespace) -> int:
+    """``morphonavi map IMAGE --camera CAMERA.toml [--pose x,y,z,yaw] [--prompts ...] --out scene.json``."""
+    from pipeline.geometry import Pose, load_camera_toml, parse_pose
+    from pipeline.image_io import load_image
+    from pipeline.mapper import Mapper, prompts_from_words
+
+    camera = load_camera_toml(args.camera)
+    pose = parse_pose(args.pose) if args.pose else Pose()
+    image = load_image(args.image)
+    catalog = _catalog(args)
+    if args.prompts is not None:
+        prompts_from_words(catalog, args.prompts)  # empty list -> error before loading models
+    camera.intrinsics.check_image(image.shape[1], image.shape[0])
+    out = Path(args.out)
+    if out.exists() and out.is_dir():
+        raise _UserError(f"--out {out} is a directory; give a file name such as scene.json")
+    models = load_mapping_models(args.models, args.model_dir, catalog, args.threads)
+    with Mapper(models, catalog, _config(args)) as mapper:
+        result = mapper.run(image, camera.intrinsics, camera.mount, pose, prompts=args.prompts,
+                            image_name=Path(args.image).name)
+    scene = result.scene
+    debug_files: list[Path] = []
+    if args.debug:
+        from pipeline.debug_images import write_debug_images
+
+        debug_files = write_debug_images(result, image, args.debug)
+    scene.save(out)
+    t = scene.captures[0].timings
+    print(f"{len(scene.objects)} object(s) from {len(result.objects)} detection(s) in {t.get('total', 0.0):.2f} s "
+          f"(detect {t.get('detect', 0.0):.2f}, depth {t.get('depth', 0.0):.2f}, segment {t.get('segment', 0.0):.2f}, "
+          f"distance {t.get('distance', 0.0):.2f})")
+    for o in scene.objects:
+        d = o.source.distances.get("fused")
+        print(f"  {o.id:20s} {o.label:16s} score {o.score:.2f}  {o.source.method:9s} z {d:6.2f} m  "
+              f"world ({o.position[0]:.2f}, {o.position[1]:.2f}, {o.position[2]:.2f})")
+    for o in result.objects:
+        if o.skipped:
+            print(f"  skipped {o.detection.label} (score {o.detection.score:.2f}): {o.skipped}")
+    if debug_files:
+        print(f"debug images: {', '.join(str(p) for p in debug_files)}")
+    print(f"scene written to {out}")
+    return 0
+
+
+def add_map_parser(subparsers: Any) -> argparse.ArgumentParser:
+    """Register ``morphonavi map``."""
+    p = subparsers.add_parser(
+        "map", help="map one photo to a scene of 3D objects (scene JSON)",
+        description="Detect, segment and place the objects of one photo; write the scene JSON (world frame).",
+    )
+    p.add_argument("image", help="photo (JPEG, PNG, ...)")
+    p.add_argument("--camera", required=True, type=Path, help="camera.toml: intrinsics [px] for this image size and mount")
+    p.add_argument("--pose", default=None, help="robot pose at capture 'x,y[,z[,yaw_deg]]' (world frame, metres, degrees)")
+    p.add_argument("--prompts", nargs="*", default=None, metavar="WORD",
+                   help="what to look for (default: the catalog's prompts)")
+    p.add_argument("--out", default="scene.json", help="scene JSON to write (default scene.json)")
+    p.add_argument("--debug", type=Path, default=None, metavar="DIR",
+                   help="also write pictures: detections overlay, masks, coloured depth")
+    _add_common(p)
+    p.set_defaults(func=_run(cmd_map, "map"))
+    return p
+
+
+# --- bench -----------------------------------------------------------------------------------------
+
+
+def cmd_bench(args: argparse.Namespace) -> int:
+    """``morphonavi bench DATASET_DIR [--gt-boxes] [--out report.json]``."""
+    from pipeline.bench import format_report, run_bench
+
+    catalog = _catalog(args)
+    models = None
+    if not (args.gt_boxes and args.no_models):
+        models = load_mapping_models(args.models, args.model_dir, catalog, args.threads)
+    report = run_bench(
+        args.dataset, models, catalog, gt_boxes=args.gt_boxes, config=_config(args), iou_threshold=args.iou,
+        limit=args.limit, sources=args.source, progress=not args.no_progress,
+    )
+    print(format_report(report))
+    if args.out:
+        path = report.save(args.out)
+        print(f"\nreport written to {path}")
+    return 0
+
+
+def add_bench_parser(subparsers: Any) -> argparse.ArgumentParser:
+    """Register ``morphonavi bench``."""
+    p = subparsers.add_parser(
+        "bench", help="evaluate mapping on photos with ground-truth 3D objects",
+        description="Run the mapping pipeline on a dataset folder (index.json + per-sample JSON, the format of "
+                    "../shared/bench/dev) and print the detection ratio, the 3D centre error and the time per stage.",
+    )
+    p.add_argument("dataset", type=Path, help="dataset folder holding index.json")
+    p.add_argument("--gt-boxes", action="store_true",
+                   help="use the dataset's 2D boxes as detections (isolates the distance error)")
+    p.add_argument("--no-models", action="store_true",
+                   help="with --gt-boxes: run no model at all (size-prior distances only)")
+    p.add_argument("--iou", type=float, default=0.5, help="minimum 2D IoU of a detection / ground-truth match (0.5)")
+    p.add_argument("--limit", type=int, default=None, help="only the first N samples")
+    p.add_argument("--source", action="append", default=None, help="only samples of this source (repeatable)")
+    p.add_argument("--out", default="bench_report.json", help="JSON report to write (default bench_report.json; '' for none)")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    _add_common(p)
+    p.set_defaults(func=_run(cmd_bench, "bench"))
+    return p

@@ -1,0 +1,171 @@
+"""The benchmark: dataset loading, matching, metrics with known answers, the CLI, and the dev set."""
+
+from __future__ import annotations
+
+import argparse
+import json
+from pathlib import Path
+
+import cv2
+import numpy as np
+import pytest
+
+from pipeline.bench import (
+    BenchError, format_report, load_dataset, match_greedy, mount_from_gravity, run_bench,
+)
+from pipeline.catalog import Catalog
+from pipeline.geometry import Pose, camera_pose_in_world
+from pipeline.ground_truth import GroundTruthBundle, GroundTruthDepth, GroundTruthDetector, GroundTruthSegmenter
+from pipeline.mapper import MapperConfig, gravity_in_camera
+from test_mapper import CATALOG, INTR, OBJECTS, SCENE, WORLD_FROM_CAM
+
+SHARED = Path(__file__).resolve().parents[1].parent / "shared"
+DEV = SHARED / "bench" / "dev"
+
+
+def write_dataset(root: Path) -> Path:
+    """One rendered sample in the dev-set format, plus a labelled object the catalog does not know."""
+    root.mkdir(parents=True, exist_ok=True)
+    (root / "synth").mkdir()
+    cv2.imwrite(str(root / "synth" / "0001.png"), SCENE["image"][:, :, ::-1])
+    cam_from_world = WORLD_FROM_CAM.inverse()
+    objects = [
+        {"label": label, "label_raw": label.upper(), "center_cam": cam_from_world.apply(c).tolist(),
+         "size": list(size), "bbox2d_proj": list(box)}
+        for (label, c, size, _), box in zip(OBJECTS, SCENE["boxes"])
+    ]
+    objects.append({"label": "lamp", "label_raw": "lamp", "center_cam": [0.5, 0.0, 6.0], "size": [0.3, 0.5, 0.3],
+                    "bbox2d_proj": [10, 10, 20, 30]})
+    sample = {"image": "0001.png", "width": INTR.width, "height": INTR.height, "K": INTR.K.tolist(),
+              "gravity_cam": gravity_in_camera(WORLD_FROM_CAM).tolist(), "objects": objects}
+    (root / "synth" / "0001.json").write_text(json.dumps(sample))
+    (root / "index.json").write_text(json.dumps([{"source": "synth", "json": "synth/0001.json",
+                                                  "image": "synth/0001.png"}]))
+    return root
+
+
+def test_mount_from_gravity_puts_gravity_where_the_dataset_says() -> None:
+    rng = np.random.default_rng(1)
+    for _ in range(20):
+        g = rng.normal(size=3) + [0.0, 2.0, 0.0]
+        g /= np.linalg.norm(g)
+        mount = mount_from_gravity(g)
+        assert np.allclose(gravity_in_camera(camera_pose_in_world(Pose(), mount)), g, atol=1e-9)
+    level = mount_from_gravity(None)
+    assert np.allclose(gravity_in_camera(camera_pose_in_world(Pose(), level)), [0.0, 1.0, 0.0])
+
+
+def test_matching_is_one_to_one_class_aware_and_best_first() -> None:
+    gt = np.array([[0, 0, 10, 10], [20, 0, 30, 10], [40, 0, 50, 10]], float)
+    det = np.array([[1, 0, 11, 10], [0, 0, 10, 10], [20, 0, 30, 10], [40, 0, 50, 10]], float)
+    pairs = match_greedy(det, ["a", "a", "b", "a"], gt, ["a", "a", "b"], 0.5)
+    assert sorted((i, j) for i, j, _ in pairs) == [(1, 0)]  # det 0 loses gt 0 to the exact det 1; b != a
+    assert match_greedy(det[:1], ["a"], gt[:1], ["a"], 0.9) == []
+    assert match_greedy(np.zeros((0, 4)), [], gt, ["a", "a", "b"], 0.5) == []
+
+
+def test_bench_metrics_on_a_rendered_sample(tmp_path: Path) -> None:
+    root = write_dataset(tmp_path / "data")
+    samples = load_dataset(root, CATALOG)
+    assert len(samples) == 1 and [o.cls for o in samples[0].objects] == ["crate", "barrel", "rock", None]
+
+    # dataset boxes, no model at all: the rock (unknown size, no depth) cannot be placed
+    report = run_bench(root, None, CATALOG, gt_boxes=True, progress=False)
+    s = report.summary
+    assert (s["gt_objects_catalog"], s["matched"]) == (3, 2)
+    assert s["detection_ratio"] == pytest.approx(2 / 3)
+    assert s["excluded_labels"] == {"lamp": 1}
+    assert s["error_rel"]["median"] < 0.05
+    assert report.samples[0]["missed"] == ["rock"]
+
+    # with (ground-truth) depth the rock is placed from the depth map
+    depth_models = GroundTruthBundle(GroundTruthDetector([], []), GroundTruthSegmenter(SCENE["masks"]),
+                                     GroundTruthDepth(SCENE["depth"]))
+    report = run_bench(root, depth_models, CATALOG, gt_boxes=True, progress=False)
+    assert report.summary["detection_ratio"] == 1.0
+    errors = {m["label"]: m["error_rel"] for m in report.samples[0]["matches"]}
+    assert errors["crate"] < 0.05 and errors["barrel"] < 0.05 and errors["rock"] < 0.1
+
+
+def test_bench_with_a_detector_counts_wrong_classes_as_unmatched(tmp_path: Path) -> None:
+    root = write_dataset(tmp_path / "data")
+    boxes = list(SCENE["boxes"]) + [SCENE["boxes"][0]]
+    labels = ["crate", "crate", "rock", "barrel"]  # the barrel box called a crate; a barrel on the crate
+    detector = GroundTruthDetector(boxes, labels, scores=[0.9, 0.8, 0.7, 0.6])
+    models = GroundTruthBundle(detector, GroundTruthSegmenter(SCENE["masks"]), GroundTruthDepth(SCENE["depth"]))
+    config = MapperConfig(segment="none", same_object_iou=None)  # keep the barrel called on the crate's box
+    report = run_bench(root, models, CATALOG, config=config, progress=False)
+    s = report.summary
+    assert s["matched"] == 2  # crate and rock
+    assert sorted(report.samples[0]["missed"]) == ["barrel"]
+    assert s["unmatched_detections"] == 2
+    assert s["detection_ratio_vocabulary"] == pytest.approx(2 / 3)
+    assert set(s["mean_time_s"]) >= {"detect", "depth", "segment", "distance", "total"}
+    text = format_report(report)
+    assert "detection ratio" in text and "66.7%" in text and "synth" in text
+    saved = report.save(tmp_path / "out" / "report.json")
+    assert json.loads(saved.read_text())["summary"]["matched"] == 2
+
+
+def test_bad_datasets_get_specific_errors(tmp_path: Path) -> None:
+    with pytest.raises(BenchError, match="not a folder"):
+        load_dataset(tmp_path / "nowhere", CATALOG)
+    (tmp_path / "index.json").write_text("{not json")
+    with pytest.raises(BenchError, match="cannot read JSON"):
+        load_dataset(tmp_path, CATALOG)
+    (tmp_path / "index.json").write_text(json.dumps([{"json": "a.json"}]))
+    with pytest.raises(BenchError, match="a.json: no such file"):
+        load_dataset(tmp_path, CATALOG)
+    (tmp_path / "a.json").write_text(json.dumps({"image": "a.png", "width": 10, "height": 10}))
+    with pytest.raises(BenchError, match="missing field 'K'"):
+        load_dataset(tmp_path, CATALOG)
+    with pytest.raises(BenchError, match="models are required"):
+        run_bench(write_dataset(tmp_path / "d"), None, CATALOG)
+
+
+def test_cli_bench_writes_a_report(tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
+                                   capsys: pytest.CaptureFixture[str]) -> None:
+    import pipeline.cli_commands as cc
+
+    monkeypatch.setattr(cc, "_catalog", lambda args: CATALOG)
+    root = write_dataset(tmp_path / "data")
+    parser = argparse.ArgumentParser(prog="morphonavi")
+    cc.add_bench_parser(parser.add_subparsers(dest="command", required=True))
+    out = tmp_path / "report.json"
+    args = parser.parse_args(["bench", str(root), "--gt-boxes", "--no-models", "--no-progress", "--out", str(out)])
+    assert args.func(args) == 0
+    printed = capsys.readouterr().out
+    assert "3D centre error" in printed and "report written" in printed
+    assert json.loads(out.read_text())["summary"]["matched"] == 2
+    args = parser.parse_args(["bench", str(tmp_path / "missing"), "--gt-boxes", "--no-models", "--out", ""])
+    assert args.func(args) == 2
+    assert "not a folder" in capsys.readouterr().err
+
+
+@pytest.mark.skipif(not DEV.is_dir(), reason="needs ../shared/bench/dev")
+def test_dev_set_with_dataset_boxes() -> None:
+    catalog = Catalog.load()
+    report = run_bench(DEV, None, catalog, gt_boxes=True, sources=["sunrgbd", "kitti"], limit=3, progress=False)
+    s = report.summary
+    assert s["images"] == 3 and s["gt_objects_catalog"] > 0
+    assert 0.5 <= s["detection_ratio"] <= 1.0
+    assert s["error_rel"]["median"] < 0.5  # size priors, not ground-truth sizes: tens of percent at worst
+
+
+@pytest.mark.skipif(not DEV.is_dir() or not (SHARED / "models" / "yolox_nano").is_dir(),
+                    reason="needs ../shared/bench/dev and ../shared/models")
+def test_dev_set_with_the_offline_models(tmp_path: Path) -> None:
+    from pipeline.mapper import load_mapping_models
+
+    catalog = Catalog.load()
+    models = load_mapping_models("offline", SHARED / "models", catalog)
+    report = run_bench(DEV, models, catalog, sources=["kitti"], limit=2, config=MapperConfig(segment="auto"),
+                       progress=False)
+    s = report.summary
+    assert s["images"] == 2
+    assert 0.0 <= s["detection_ratio"] <= 1.0 and s["gt_objects_in_vocabulary"] > 0
+    assert s["matched"] >= 1  # YOLOX-Nano finds the near KITTI cars
+    assert s["error_rel"]["median"] is not None and s["error_rel"]["median"] < 0.3
+    assert s["mean_time_s"]["total"] > 0 and s["mean_time_s"]["detect"] > 0
+    report.save(tmp_path / "r.json")
+    assert json.loads((tmp_path / "r.json").read_text())["models"]["detector"] == "yolox_nano"

@@ -1,0 +1,197 @@
+"""The mission manager on the simulated robot: segments, progress, geofence, pause, failures, failsafe."""
+
+from __future__ import annotations
+
+import math
+import time
+
+import numpy as np
+import pytest
+
+from console.link.base import Mode
+from console.link.manager import GeofenceError, MissionManager, MissionStateError, MissionStatus
+from console.link.sim import SimConfig, SimRobot
+from console.link.world import DEFAULT_START, SEARCH_GOAL, paper_room
+from planner.grid import Workspace, build_grid
+from planner.mission import Mission, MissionSegment, SegmentKind
+
+WALK, TAKEOFF, FLY, LAND = SegmentKind.WALK, SegmentKind.TAKEOFF, SegmentKind.FLY, SegmentKind.LAND
+FAST = dict(walk_speed=1.0, fly_speed=1.5, climb_rate=1.0, descent_rate=1.0, spool_time=0.3, settle_time=0.2)
+
+
+def _robot(time_scale: float = 8.0, **cfg: float) -> SimRobot:
+    robot = SimRobot(config=SimConfig(time_scale=time_scale, **{**FAST, **cfg}))
+    robot.connect()
+    return robot
+
+
+def _mission(walk_to: float = 3.0, height: float = 1.75) -> Mission:
+    """Walk to the front of the box line, fly over it, land behind and walk to the dog."""
+    return Mission((
+        MissionSegment(WALK, ((2.5, 0.7, 0.0), (2.5, walk_to, 0.0))),
+        MissionSegment(TAKEOFF, ((2.5, walk_to, 0.0), (2.5, walk_to, height))),
+        MissionSegment(FLY, ((2.5, walk_to, height), (2.5, 4.0, height), (2.5, 5.0, height))),
+        MissionSegment(LAND, ((2.5, 5.0, height), (2.5, 5.0, 0.0))),
+        MissionSegment(WALK, ((2.5, 5.0, 0.0), SEARCH_GOAL)),
+    ))
+
+
+@pytest.fixture
+def robot():
+    r = _robot()
+    yield r
+    r.close()
+
+
+def test_planned_mission_finds_the_dog_end_to_end() -> None:
+    """Plan on the true map, run it segment by segment, and see the dog in the final photo."""
+    pytest.importorskip("planner.astar")
+    from planner.route import Route
+
+    robot = _robot(time_scale=10.0)
+    try:
+        grid = build_grid(paper_room(), Workspace(), margin=0.35)
+        route = Route(grid, DEFAULT_START.translation)
+        assert route.propose(SEARCH_GOAL).ok
+        route.register()
+        mission = route.mission()
+        assert mission.kinds() == ["walk", "takeoff", "fly", "land", "walk"]
+        manager = MissionManager(robot)
+        events = []
+        manager.subscribe(events.append)
+        manager.start(mission)
+        assert manager.wait(60.0) is MissionStatus.DONE, [e.message for e in events]
+        assert robot.latest_state().position == pytest.approx(mission.segments[-1].end, abs=1e-6)
+        fractions = [e.progress.fraction for e in events]
+        assert fractions == sorted(fractions) and fractions[-1] == 1.0
+        switches = [e.message for e in events if e.message.startswith("switching")]
+        assert switches == ["switching to ground control", "switching to flight control",
+                            "switching to ground control"]
+        shot = robot.capture()
+        assert any(v.label == "robot_dog" and v.pixels > 1000 for v in shot.ground_truth.visible)
+    finally:
+        robot.close()
+
+
+def test_targets_outside_the_geofence_are_refused_before_moving(robot: SimRobot) -> None:
+    bad = Mission((MissionSegment(WALK, ((2.5, 0.7, 0.0), (2.5, 2.0, 0.0))),
+                   MissionSegment(TAKEOFF, ((2.5, 2.0, 0.0), (2.5, 2.0, 3.5)))),
+                  bounds_min=(0.0, 0.0, 0.0), bounds_max=(5.0, 8.0, 3.0))
+    manager = MissionManager(robot)
+    with pytest.raises(GeofenceError, match=r"segment 2 \(takeoff\) waypoint 2 \(2.50, 2.00, 3.50\)"):
+        manager.start(bad)
+    assert manager.progress().status is MissionStatus.IDLE
+    assert robot.latest_state().position == pytest.approx(DEFAULT_START.translation)
+    # a margin widens the fence
+    MissionManager(robot, geofence_margin=0.6).check_geofence(bad)
+
+
+def test_start_refuses_a_mission_planned_elsewhere(robot: SimRobot) -> None:
+    far = Mission((MissionSegment(WALK, ((1.0, 1.5, 0.0), (1.0, 2.0, 0.0))),))
+    with pytest.raises(MissionStateError, match="robot is at"):
+        MissionManager(robot).start(far)
+
+
+def test_pause_holds_and_resume_continues_from_where_it_stopped(robot: SimRobot) -> None:
+    manager = MissionManager(robot)
+    ys: list[tuple[SegmentKind | None, float]] = []
+    robot.subscribe(lambda s: ys.append((manager.progress().kind, s.position[1])))
+    manager.start(_mission())
+    while not (manager.progress().kind is FLY and robot.latest_state().position[1] > 3.5):
+        time.sleep(0.005)
+    manager.pause()
+    assert manager.wait(5.0) is MissionStatus.PAUSED
+    held = robot.latest_state()
+    assert held.mode is Mode.HOLDING and not held.landed
+    time.sleep(0.3)
+    assert robot.latest_state().position == pytest.approx(held.position)
+    with pytest.raises(MissionStateError):
+        manager.start(_mission())  # one mission at a time
+    manager.resume()
+    # a second pause in the same flight, past its middle waypoint
+    while robot.latest_state().position[1] < 4.3:
+        time.sleep(0.005)
+    manager.pause()
+    assert manager.wait(5.0) is MissionStatus.PAUSED
+    manager.resume()
+    assert manager.wait(30.0) is MissionStatus.DONE
+    assert robot.latest_state().position == pytest.approx(SEARCH_GOAL)
+    # the flight never went back towards its start after the pauses
+    fly = [y for k, y in ys if k is FLY]
+    assert np.all(np.diff(fly) >= -1e-9)
+    with pytest.raises(MissionStateError):
+        manager.resume()
+
+
+def test_abort_stops_for_good(robot: SimRobot) -> None:
+    manager = MissionManager(robot)
+    manager.start(_mission())
+    while manager.progress().kind is not TAKEOFF:
+        time.sleep(0.005)
+    manager.abort()
+    assert manager.wait(5.0) is MissionStatus.ABORTED
+    time.sleep(0.2)
+    st = robot.latest_state()
+    assert st.mode in (Mode.HOLDING, Mode.IDLE) and st.speed == pytest.approx(0.0, abs=1e-9)
+    with pytest.raises(MissionStateError):
+        manager.resume()
+    manager.start(Mission((MissionSegment(WALK, (st.position, st.position)),), id="next"))  # a new one is fine
+
+
+def test_a_blocked_path_pauses_the_mission_with_the_reason(robot: SimRobot) -> None:
+    # the operator's map missed the boxes: the plan walks straight through them
+    through = Mission((MissionSegment(WALK, ((2.5, 0.7, 0.0), (2.5, 3.0, 0.0), (2.5, 5.5, 0.0))),))
+    manager = MissionManager(robot)
+    manager.start(through)
+    assert manager.wait(30.0) is MissionStatus.PAUSED
+    p = manager.progress()
+    assert "walking stopped" in p.message and "cardboard_box" in p.message and "paused" in p.message
+    assert p.segment == 0 and p.mission_id == through.id and 0.2 < p.fraction < 0.8
+    manager.abort()
+    assert manager.wait(5.0) is MissionStatus.ABORTED
+
+
+def test_link_loss_runs_the_failsafe_and_the_mission_survives() -> None:
+    # time_scale 1 so the outage (simulated seconds) and the manager (wall seconds) share a clock
+    robot = _robot(time_scale=1.0, fly_speed=0.6, climb_rate=3.0, link_loss_hold=0.2, link_loss_land=0.6,
+                   descent_rate=3.0)
+    hop = Mission((
+        MissionSegment(TAKEOFF, ((2.5, 0.7, 0.0), (2.5, 0.7, 1.5))),
+        MissionSegment(FLY, ((2.5, 0.7, 1.5), (2.5, 2.2, 1.5))),
+        MissionSegment(LAND, ((2.5, 2.2, 1.5), (2.5, 2.2, 0.0))),
+        MissionSegment(WALK, ((2.5, 2.2, 0.0), (2.5, 2.9, 0.0))),
+    ))
+    try:
+        manager = MissionManager(robot, failsafe_after=0.3, failsafe_hold=0.3)
+        manager.start(hop)
+        while manager.progress().kind is not FLY:
+            time.sleep(0.005)
+        time.sleep(0.2)
+        robot.drop_link(2.0)
+        assert manager.wait(5.0, until=[MissionStatus.FAILSAFE]) is MissionStatus.FAILSAFE
+        deadline = time.monotonic() + 5.0
+        while (robot.latest_state().link_ok is False or not robot.latest_state().landed) and time.monotonic() < deadline:
+            time.sleep(0.02)
+        msgs = [e.message for e in manager.events]
+        assert any(m.startswith("FAILSAFE: no heartbeat") for m in msgs)
+        assert any("not delivered" in m for m in msgs)  # no link: the robot's own failsafe landed it
+        st = robot.latest_state()
+        assert st.landed and st.link_ok and 0.8 < st.position[1] < 2.0
+        p = manager.progress()
+        assert p.status is MissionStatus.FAILSAFE and p.segment == 1 and p.mission_id == hop.id
+        manager.resume()  # takes off again where it landed and finishes the flight
+        assert manager.wait(30.0) is MissionStatus.DONE, [e.message for e in manager.events]
+        assert robot.latest_state().position == pytest.approx((2.5, 2.9, 0.0))
+        assert any("recovery" in m for m in (e.message for e in manager.events))
+    finally:
+        robot.close()
+
+
+def test_manager_rejects_nonsense_settings(robot: SimRobot) -> None:
+    with pytest.raises(ValueError, match="failsafe_after"):
+        MissionManager(robot, failsafe_after=0)
+    with pytest.raises(ValueError, match="geofence_margin"):
+        MissionManager(robot, geofence_margin=-1)
+    with pytest.raises(MissionStateError, match="cannot pause"):
+        MissionManager(robot).pause()
+    assert math.isfinite(MissionManager(robot).failsafe_hold)
