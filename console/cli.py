@@ -144,8 +144,9 @@ def build_parser() -> argparse.ArgumentParser:
 def _extra_commands() -> list[Callable[[argparse._SubParsersAction], None]]:  # type: ignore[type-arg]
     """Subcommands whose parsers live beside the code they run."""
     from console.console_cmd import add_console_parser
+    from pipeline.cli_commands import add_bench_parser, add_map_parser
 
-    return [add_console_parser]
+    return [add_console_parser, add_map_parser, add_bench_parser]
 
 
 def main(argv: Sequence[str] | None = None) -> int:

@@ -243,13 +243,15 @@ class OfflineModels:
         self._lock = threading.Lock()
 
     def __call__(self, shot: CaptureResult) -> Any:
+        from pipeline.catalog import default_catalog
+        from pipeline.mapper import load_mapping_models
         from pipeline.models.base import ModelError
-        from pipeline.models.loader import load_models
 
         with self._lock:
             if self._bundle is None:
                 try:
-                    self._bundle = load_models("offline", self.model_dir)
+                    # closed-vocabulary labels (COCO) mapped to catalog classes
+                    self._bundle = load_mapping_models("offline", self.model_dir, default_catalog())
                 except ModelError as exc:  # ModelMissingError names `morphonavi models fetch NAME`
                     raise MappingError(str(exc)) from None
             return self._bundle
