@@ -319,6 +319,7 @@ def fuse_distances(
     w_geometric: float = 0.8,
     w_depth: float = 0.2,
     gate: float | None = None,
+    nearer_depth_wins: bool = False,
 ) -> FusedDistance | None:
     """The paper's weighted mean ``(w_g * geometric + w_d * depth) / (w_g + w_d)`` [m].
 
@@ -327,12 +328,20 @@ def fuse_distances(
     ``gate``: when ``|ln(depth / geometric)|`` exceeds it, the two disagree beyond their errors and
     the depth reading is dropped (a size prior is off by tens of percent at worst; a depth map out of
     its domain can be off by any factor).
+
+    ``nearer_depth_wins`` (for a metric depth map): when the gate is exceeded with the depth reading
+    *nearer* than the size prior, the depth wins instead. A box cut short (by the image border, or by
+    an occluder in front: a desk hiding a suitcase's lower half) makes an object look smaller, hence
+    farther, by any factor; nothing makes it look larger. So a size prior far beyond a metric depth
+    reading is the unreliable one.
     """
     if w_geometric < 0 or w_depth < 0 or not math.isfinite(w_geometric + w_depth) or w_geometric + w_depth <= 0:
         raise DistanceError(f"fusion weights must be >= 0 and not both 0, got {w_geometric}, {w_depth}")
     g = None if geometric is None or not math.isfinite(geometric) or geometric <= 0 else float(geometric)
     d = None if depth is None or not math.isfinite(depth) or depth <= 0 else float(depth)
     if g is not None and d is not None and gate is not None and abs(math.log(d / g)) > gate:
+        if nearer_depth_wins and d < g:
+            return FusedDistance(d, "depth")
         d = None
     if g is not None and d is not None:
         if w_depth == 0:

@@ -603,7 +603,9 @@ class Mapper:
             else:
                 half = self._half_depth(obj, surface, intr)
                 obj.depth_z = float(centre_on_ray(uv, surface, half, intr)[2])
-        obj.fused = fuse_distances(obj.geometric_z, obj.depth_z, *weights)
+        # a metric map (metric model or renderer) beats a size prior read off a box cut short
+        metric = scale is not None and scale.kind == "metric"
+        obj.fused = fuse_distances(obj.geometric_z, obj.depth_z, *weights, nearer_depth_wins=metric)
         if obj.fused is None:
             obj.skipped = "no distance: unknown size (or every dimension cut) and no metric depth"
             return
