@@ -101,10 +101,21 @@ def test_bench_with_a_detector_counts_wrong_classes_as_unmatched(tmp_path: Path)
     assert s["unmatched_detections"] == 2
     assert s["detection_ratio_vocabulary"] == pytest.approx(2 / 3)
     assert set(s["mean_time_s"]) >= {"detect", "depth", "segment", "distance", "total"}
+    # the sample is fully annotated: its two unmatched detections are false positives
+    assert s["complete_annotation"] == {"images": 1, "detections": 4, "unmatched_detections": 2, "precision": 0.5}
     text = format_report(report)
     assert "detection ratio" in text and "66.7%" in text and "synth" in text
+    assert "precision             50.0% of 4 detections" in text and "(2 unmatched)" in text
     saved = report.save(tmp_path / "out" / "report.json")
     assert json.loads(saved.read_text())["summary"]["matched"] == 2
+
+    # partially annotated: an unmatched detection may be an unlabelled object, so no precision
+    sample_json = root / "synth" / "0001.json"
+    sample_json.write_text(json.dumps({**json.loads(sample_json.read_text()), "partial_annotation": True}))
+    partial = run_bench(root, models, CATALOG, config=config, progress=False).summary
+    assert partial["unmatched_detections"] == 2 and partial["matched"] == 2
+    assert partial["complete_annotation"] == {"images": 0, "detections": 0, "unmatched_detections": 0,
+                                              "precision": None}
 
 
 def test_bad_datasets_get_specific_errors(tmp_path: Path) -> None:

@@ -13,7 +13,7 @@ from onnx_fixtures import wrong_signature_model, yolox_model
 
 from pipeline.image_io import load_image
 from pipeline.models.base import ModelError, ModelMissingError
-from pipeline.models.yolox import YoloxDetector, decode, grid_and_strides, letterbox, read_labels
+from pipeline.models.yolox import DEFAULT_SCORE_THRESHOLD, YoloxDetector, decode, grid_and_strides, letterbox, read_labels
 
 SHARED = Path(__file__).resolve().parents[1].parent / "shared"
 YOLOX = SHARED / "models" / "yolox_nano"
@@ -90,6 +90,18 @@ def test_detect_maps_labels_and_runs_class_wise_nms(tiny: YoloxDetector) -> None
     assert tiny.vocabulary(prompts) == {"office_chair", "sofa"}
     assert tiny.detect(img, [("a sofa", "sofa")]) == []  # chair not asked for
     assert tiny.detect(img, []) == []
+
+
+def test_score_threshold_keeps_only_boxes_above_it(tiny: YoloxDetector) -> None:
+    img = np.zeros((128, 256, 3), np.uint8)
+    chair = [("an office chair", "office_chair")]
+    assert tiny.score_threshold == DEFAULT_SCORE_THRESHOLD == 0.25
+    tiny.score_threshold = 0.71  # just below the chair's 0.72: kept
+    assert [d.score for d in tiny.detect(img, chair)] == [pytest.approx(0.72)]
+    tiny.score_threshold = 0.73
+    assert tiny.detect(img, chair) == []
+    tiny.score_threshold, tiny.nms_iou = 0.3, 0.9  # the second, overlapping chair (0.40) survives a lax NMS
+    assert [round(d.score, 2) for d in tiny.detect(img, chair)] == [0.72, 0.4]
 
 
 def test_errors(tmp_path: Path, tiny: YoloxDetector) -> None:
