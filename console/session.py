@@ -260,12 +260,24 @@ _NAME_OK = re.compile(r"^[A-Za-z0-9_.\-/ ]+$")
 def merge_observations(scene: Scene, new: Scene, *, match_radius: float = 0.6) -> tuple[Scene, list[str], list[str]]:
     """Fold newly mapped world-frame objects into a scene.
 
-    A new object replaces an existing one with the same id, or else the nearest existing object
-    of the same label whose centre lies within ``match_radius`` [m] (or half the larger object's
-    footprint diagonal, if bigger) — the same thing seen again. Objects the operator placed or
-    moved by hand (``source.method == "manual"``) are never replaced. Everything else is added;
-    clashing ids get a suffix. Returns ``(scene, added_ids, updated_ids)``.
+    A new object replaces an existing one with the same id from the same capture (the same file
+    loaded again), or else the nearest existing object of the same label whose centre lies within
+    ``match_radius`` [m] (or half the larger object's footprint diagonal, if bigger) — the same thing
+    seen again. Ids from different captures say nothing (every capture numbers its objects from 1).
+    A view cut by the image border never replaces an uncut view of the same object (a truncated box
+    gives a biased position). Objects the operator placed or moved by hand
+    (``source.method == "manual"``) are never replaced. Everything else is added; clashing ids get a
+    suffix. Returns ``(scene, added_ids, updated_ids)``.
     """
+    sizes = {c.id: (c.intrinsics.get("width"), c.intrinsics.get("height")) for c in scene.captures + new.captures}
+
+    def cut(o: SceneObject) -> bool:
+        w, h = sizes.get(o.source.capture or "", (None, None))
+        b = o.source.bbox
+        if b is None or not w or not h:
+            return False
+        return b[0] <= 2 or b[1] <= 2 or b[2] >= w - 2 or b[3] >= h - 2
+
     objects = list(scene.objects)
     index = {o.id: n for n, o in enumerate(objects)}
     added: list[str] = []
@@ -275,12 +287,14 @@ def merge_observations(scene: Scene, new: Scene, *, match_radius: float = 0.6) -
         if obj.frame != "world":
             raise SceneError(f"objects[{obj.id}].frame", f"must be world to spawn, got {obj.frame}")
         target: int | None = index.get(obj.id)
+        if target is not None and objects[target].source.capture != obj.source.capture:
+            target = None
         if target is None:
             best = math.inf
             for n, old in enumerate(objects):
                 if n in claimed or old.label != obj.label or old.source.method == "manual":
                     continue
-                d = math.dist(old.position[:2], obj.position[:2])
+                d = math.dist(old.position, obj.position)  # 3D: stacked boxes share x, y
                 reach = max(match_radius, 0.5 * math.hypot(max(old.size[0], obj.size[0]), max(old.size[2], obj.size[2])))
                 if d <= reach and d < best:
                     best, target = d, n
@@ -288,7 +302,8 @@ def merge_observations(scene: Scene, new: Scene, *, match_radius: float = 0.6) -
             target = None
             obj = replace(obj, id=f"{obj.id}-seen")
         if target is not None:
-            objects[target] = replace(obj, id=objects[target].id)
+            if not (cut(obj) and not cut(objects[target])):
+                objects[target] = replace(obj, id=objects[target].id)
             claimed.add(target)
             updated.append(objects[target].id)
             continue

@@ -127,6 +127,7 @@ class GroundTruthDepth:
     """Serves the given metric depth map [m] (camera-frame z); kind ``metric``."""
 
     kind = "metric"
+    exact = True  # the mapper neither rescales it nor lets size priors override it
 
     def __init__(self, depth_m: np.ndarray, name: str = f"{GT_NAME} (depth)") -> None:
         d = np.asarray(depth_m, dtype=np.float32)

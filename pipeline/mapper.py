@@ -87,7 +87,10 @@ class MapperConfig:
         detect_tile_factor: For a detector with a fixed input size (``input_size``, e.g. YOLOX's
             416 px), photos whose longer side exceeds 1.25 tiles are also detected on overlapping
             tiles of ``detect_tile_factor`` times that size (small far objects, see
-            :mod:`pipeline.tiled_detection`); ``None``: the whole image only.
+            :mod:`pipeline.tiled_detection`); ``None``: the whole image only. 1.5 (624 px tiles for
+            YOLOX-Nano) was the best measured trade-off on the dev set: tiles of 1.0 / 0.75 input
+            sizes (more, upscaled tiles) found no more objects for 2-3x the time and more false
+            detections, and horizontal-flip test-time augmentation none more for twice the time.
         same_object_iou: Detections of different classes whose boxes overlap more than this (IoU) are
             taken for one object seen twice (a closed-vocabulary detector calls a bed "bed" and
             "sofa"): only the more confident stays. ``None``: keep both (class-aware NMS only).
@@ -99,6 +102,13 @@ class MapperConfig:
             size prior by more than ``gate_sigmas`` combined standard errors (log ratio).
         geometric_sigma: Relative error of a size-prior distance (the spread of real sizes).
         gate_sigmas: See ``fusion``.
+        trust_depth_spread: Adaptive fusion: a metric depth map whose spread against the size priors
+            (:func:`~pipeline.distance.depth_fit_spread`) is at most this is trusted over a size prior
+            that puts an object beyond the gate *farther* than the map (a box cut short by the border
+            or an occluder; renders' exact depth: up to ~0.3 from occluded references; FastDepth on KITTI: larger).
+        exact_depth: The depth map is exact metric depth (ground-truth perception of a simulator's
+            render): it is never rescaled from the size priors, and where it has a reading it decides
+            the distance (the size prior is used only where it has none).
         yaw_from_fit: Give objects the yaw of the fitted 3D box instead of facing the camera. Off by
             default: a 2D box hardly constrains the yaw (a yaw and its mirror image about the viewing
             ray give the same box; on noise-free renders the fitted yaw of near-square footprints
@@ -124,6 +134,8 @@ class MapperConfig:
     geometric_sigma: float = 0.1
     gate_sigmas: float = 3.0
     yaw_from_fit: bool = False
+    trust_depth_spread: float = 0.3
+    exact_depth: bool = False
 
     def __post_init__(self) -> None:
         if self.w_geometric < 0 or self.w_depth < 0 or self.w_geometric + self.w_depth <= 0:
@@ -530,12 +542,19 @@ class Mapper:
             obj.depth_value = mask_median_depth(depth_map.values, depth_region)
         return obj
 
+    @property
+    def _exact_depth(self) -> bool:
+        """Exact metric depth: configured, or declared by the depth backend (``exact = True``)."""
+        return self.config.exact_depth or bool(getattr(self.models.depth, "exact", False))
+
     def _depth_scale(self, objects: list[MappedObject], depth_map: DepthMap | None) -> DepthScale | None:
         """Metric conversion of the depth map, fitted from the objects of known size when configured."""
         if depth_map is None:
             return None
         values, surfaces = self._references(objects)
         if depth_map.kind == "metric":
+            if self._exact_depth:
+                return IDENTITY_SCALE
             if self.config.fit_depth and len(values) >= max(1, self.config.refit_metric_min_refs):
                 return fit_depth_scale(values, surfaces, "metric") or IDENTITY_SCALE  # type: ignore[arg-type]
             return IDENTITY_SCALE
@@ -563,12 +582,17 @@ class Mapper:
 
     def _fusion_weights(
         self, objects: list[MappedObject], scale: DepthScale | None
-    ) -> tuple[tuple[float, float, float | None], str]:
-        """``((w_geometric, w_depth, gate), description)`` for this image (see :attr:`MapperConfig.fusion`)."""
+    ) -> tuple[tuple[float, float, float | None, bool], str]:
+        """``((w_geometric, w_depth, gate, nearer_depth_wins), description)`` for this image (see
+        :attr:`MapperConfig.fusion`). ``nearer_depth_wins``: the map is metric and agrees with the size
+        priors here (spread within ``trust_depth_spread``), so it beats a size prior read off a box cut
+        short (image border or occluder; see :func:`~pipeline.distance.fuse_distances`)."""
         cfg = self.config
+        if self._exact_depth and scale is not None:
+            return (0.0, 1.0, None, False), "exact depth: the depth map decides, size priors only where it has no reading"
         note = f"fixed: w_geometric {cfg.w_geometric:g}, w_depth {cfg.w_depth:g}"
         if cfg.fusion == "fixed" or scale is None:
-            return (cfg.w_geometric, cfg.w_depth, None), note
+            return (cfg.w_geometric, cfg.w_depth, None, False), note
         values, surfaces = self._references(objects)
         spread = depth_fit_spread(values, surfaces, scale)
         sg = cfg.geometric_sigma
@@ -584,10 +608,13 @@ class Mapper:
             why = (f"adaptive: w_geometric {wg:.2f}, w_depth {wd:.2f} (depth vs size priors: spread {spread:.0%} "
                    f"over {len(values)} reference objects)")
         gate = cfg.gate_sigmas * math.sqrt(sg**2 + sd**2)
-        return (wg, wd, gate), f"{why}; depth dropped beyond x{math.exp(gate):.2f} from the size prior"
+        trusted = scale.kind == "metric" and spread is not None and spread <= cfg.trust_depth_spread
+        if trusted:
+            why += "; a nearer metric depth beats a size prior beyond the gate"
+        return (wg, wd, gate, trusted), f"{why}; depth dropped beyond x{math.exp(gate):.2f} from the size prior"
 
     def _place(self, obj: MappedObject, scale: DepthScale | None, intr: Intrinsics,
-               weights: tuple[float, float, float | None]) -> None:
+               weights: tuple[float, float, float | None, bool]) -> None:
         """Depth-map distance, fusion and the camera-frame centre of one object."""
         if obj.skipped:
             return
@@ -603,9 +630,7 @@ class Mapper:
             else:
                 half = self._half_depth(obj, surface, intr)
                 obj.depth_z = float(centre_on_ray(uv, surface, half, intr)[2])
-        # a metric map (metric model or renderer) beats a size prior read off a box cut short
-        metric = scale is not None and scale.kind == "metric"
-        obj.fused = fuse_distances(obj.geometric_z, obj.depth_z, *weights, nearer_depth_wins=metric)
+        obj.fused = fuse_distances(obj.geometric_z, obj.depth_z, *weights)
         if obj.fused is None:
             obj.skipped = "no distance: unknown size (or every dimension cut) and no metric depth"
             return

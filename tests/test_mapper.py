@@ -92,6 +92,16 @@ def gt_bundle(depth: Any = None) -> GroundTruthBundle:
     )
 
 
+class MetricModelDepth:
+    """A metric depth *model* (not exact): the same map, but the mapper may rescale and fuse it."""
+
+    name = "stub metric depth"
+    kind = "metric"
+
+    def estimate(self, image_rgb: np.ndarray) -> DepthMap:
+        return DepthMap(SCENE["depth"].astype(np.float32), "metric")
+
+
 class InverseDepth:
     """A relative-inverse-depth model: disparity = 2 / z + 0.1 where something was hit."""
 
@@ -109,7 +119,7 @@ def _by_label(scene: Any) -> dict[str, Any]:
 
 @pytest.mark.parametrize("placement", ["box_fit", "ray"])
 def test_objects_land_at_their_world_positions(placement: str) -> None:
-    with Mapper(gt_bundle(), CATALOG, MapperConfig(placement=placement)) as mapper:
+    with Mapper(gt_bundle(MetricModelDepth()), CATALOG, MapperConfig(placement=placement)) as mapper:
         result = mapper.run(SCENE["image"], INTR, MOUNT, ROBOT, capture_id="cap-1")
     scene = result.scene
     objs = _by_label(scene)
@@ -422,3 +432,13 @@ def test_ground_truth_backends_serve_the_given_arrays() -> None:
     d = depth.estimate(image)
     assert d.kind == "metric" and d.values[10, 20] == 2.0 and d.values[0, 0] == 0.0
     assert depth.name.startswith("ground-truth perception")
+
+
+def test_exact_depth_decides_and_is_not_rescaled() -> None:
+    """Ground-truth depth (``exact = True``) places known-size objects by depth, unscaled."""
+    with Mapper(gt_bundle(), CATALOG) as mapper:
+        res = mapper.run(SCENE["image"], INTR, MOUNT, ROBOT, capture_id="cap-1")
+    objs = _by_label(res.scene)
+    assert objs["crate"].source.method == "depth"
+    assert objs["crate"].source.distances["fused"] == pytest.approx(objs["crate"].source.distances["depth"])
+    assert "exact depth" in " ".join(res.scene.captures[0].models.values())

@@ -474,3 +474,32 @@ def test_mapping_job_failure_is_reported_not_raised(session: Session) -> None:
     assert session.job.error is not None and "no answer from the robot" in session.job.error
     assert notices[-1].level == "error"
     assert session.scene.objects == ()
+
+
+def test_merge_keeps_stacked_boxes_and_ignores_ids_of_other_captures() -> None:
+    """Regression: stacked boxes share x, y (match in 3D); every capture numbers ids from 1."""
+    from pipeline.scene import Capture, Scene, SceneObject, Source
+
+    from console.session import merge_observations
+
+    def box(oid: str, cap: str, x: float, z: float, bbox=(100.0, 100.0, 200.0, 200.0)) -> SceneObject:
+        return SceneObject(oid, "cardboard_box", (x, 4.0, z), (0.45, 0.4, 0.45),
+                           source=Source(capture=cap, method="depth", bbox=bbox))
+
+    cam = {"width": 640.0, "height": 480.0}
+    first = Scene(objects=(box("cardboard_box-1", "c1", 1.0, 0.2), box("cardboard_box-2", "c1", 1.0, 0.6)),
+                  captures=(Capture("c1", intrinsics=cam),))
+    scene, added, _ = merge_observations(Scene(), first)
+    assert len(added) == 2
+    # the second photo sees only the top box, and calls it "cardboard_box-1"
+    second = Scene(objects=(box("cardboard_box-1", "c2", 1.02, 0.62),), captures=(Capture("c2", intrinsics=cam),))
+    scene, added, updated = merge_observations(scene, second)
+    zs = sorted(o.position[2] for o in scene.objects)
+    assert added == [] and len(scene.objects) == 2
+    assert zs[0] == pytest.approx(0.2) and zs[1] == pytest.approx(0.62)
+    # a view cut by the image border does not replace an uncut one
+    third = Scene(objects=(box("x", "c3", 1.3, 0.25, bbox=(0.0, 100.0, 50.0, 200.0)),),
+                  captures=(Capture("c3", intrinsics=cam),))
+    scene, _, updated = merge_observations(scene, third)
+    assert len(scene.objects) == 2 and updated
+    assert min(o.position[0] for o in scene.objects) == pytest.approx(1.0)
