@@ -33,6 +33,7 @@ from planner.route import Route
 FAST = dict(walk_speed=1.0, fly_speed=1.5, climb_rate=1.0, descent_rate=1.0, spool_time=0.3, settle_time=0.2)
 BLOCKER = re.compile(r"occupies \(([-\d.]+), ([-\d.]+), ([-\d.]+)\)")
 MAX_ROUNDS = 10
+MARGIN = float(__import__("os").environ.get("LOOP_MARGIN", "0.5"))
 
 CENTRE_TOLERANCE_MEDIAN = 0.40
 """Median 3D centre error [m] allowed over the merged map (measured: see bench/sim_mapping.py)."""
@@ -101,7 +102,7 @@ def test_search_and_rescue_loop_reaches_the_dog_against_the_hidden_truth() -> No
                                  capture_id=f"loop-{round_}")
             dog_seen |= any(o.label == "robot_dog" for o in res.scene.objects)
             scene, _, _ = merge_observations(scene, res.scene)
-            route = Route(build_grid(scene, Workspace(), margin=0.35), robot.latest_state().position)
+            route = Route(build_grid(scene, Workspace(), margin=MARGIN), robot.latest_state().position)
             plan = route.propose(SEARCH_GOAL)
             assert plan.ok, plan.message
             route.register()
