@@ -261,7 +261,8 @@ def merge_observations(scene: Scene, new: Scene, *, match_radius: float = 0.6) -
     """Fold newly mapped world-frame objects into a scene.
 
     A new object replaces an existing one with the same id from the same capture (the same file
-    loaded again), or else the nearest existing object of the same label whose centre lies within
+    loaded again; only an object the scene held before this merge and not yet replaced by it), or
+    else the nearest existing object of the same label whose centre lies within
     ``match_radius`` [m] (or half the larger object's footprint diagonal, if bigger) — the same thing
     seen again. Ids from different captures say nothing (every capture numbers its objects from 1).
     A view cut by the image border never replaces an uncut view of the same object (a truncated box
@@ -287,7 +288,10 @@ def merge_observations(scene: Scene, new: Scene, *, match_radius: float = 0.6) -
         if obj.frame != "world":
             raise SceneError(f"objects[{obj.id}].frame", f"must be world to spawn, got {obj.frame}")
         target: int | None = index.get(obj.id)
-        if target is not None and objects[target].source.capture != obj.source.capture:
+        # the id rule holds only for an object of the scene as it was before this merge: once
+        # replaced or added here it carries the new capture's id, and another new object sharing
+        # that id is a different thing (ids of a capture are unique)
+        if target is not None and (target in claimed or objects[target].source.capture != obj.source.capture):
             target = None
         if target is None:
             best = math.inf

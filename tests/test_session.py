@@ -503,3 +503,28 @@ def test_merge_keeps_stacked_boxes_and_ignores_ids_of_other_captures() -> None:
     scene, _, updated = merge_observations(scene, third)
     assert len(scene.objects) == 2 and updated
     assert min(o.position[0] for o in scene.objects) == pytest.approx(1.0)
+
+
+def test_merge_does_not_let_a_new_id_hit_an_object_replaced_in_the_same_merge() -> None:
+    """Regression (sim loop): a re-sighting takes over an old object's id and capture; a later
+    object of the same photo that happens to share that id must not overwrite it (the box would
+    vanish from the map and the planner would walk into it)."""
+    def box(oid: str, cap: str, x: float) -> SceneObject:
+        return SceneObject(oid, "cardboard_box", (x, 4.0, 0.2), (0.45, 0.4, 0.45),
+                           source=Source(capture=cap, method="depth"))
+
+    first = Scene(objects=(box("cardboard_box-10", "c1", 2.5), box("cardboard_box-16", "c1", 3.4)),
+                  captures=(Capture("c1"),))
+    scene, _, _ = merge_observations(Scene(), first)
+    # the second photo numbers the box at x = 2.5 "cardboard_box-3" and the one at x = 3.4
+    # "cardboard_box-10"; both are re-sightings, in this order
+    second = Scene(objects=(box("cardboard_box-3", "c2", 2.52), box("cardboard_box-10", "c2", 3.38)),
+                   captures=(Capture("c2"),))
+    scene, added, updated = merge_observations(scene, second)
+    assert added == [] and sorted(updated) == ["cardboard_box-10", "cardboard_box-16"]
+    xs = sorted(o.position[0] for o in scene.objects)
+    assert xs == pytest.approx([2.52, 3.38])
+    # loading the same file again still replaces by id (each object once)
+    again, added, updated = merge_observations(scene, second)
+    assert added == [] and len(again.objects) == 2
+    assert sorted(o.position[0] for o in again.objects) == pytest.approx([2.52, 3.38])
