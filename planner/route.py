@@ -11,6 +11,7 @@ Planning never raises for operator mistakes: :class:`PlanResult` carries ``ok`` 
 from __future__ import annotations
 
 import math
+import time
 from dataclasses import dataclass, field
 from typing import Any, Sequence
 
@@ -109,8 +110,6 @@ class Route:
 
     def plan(self, start: Sequence[float], goal: Sequence[float]) -> PlanResult:
         """Plan between two world points without changing the route."""
-        import time
-
         s, why = self.check_point(start, "start")
         if s is None:
             return PlanResult(False, why)
