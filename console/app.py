@@ -80,6 +80,10 @@ class ConsoleConfig:
         fresh: Start from an empty session instead of restoring the last one.
         resolution: Planning grid cell size [m].
         margin: Robot radius [m] (dangerous margin around obstacles).
+        captures: Folder of real photos (the format of ``../shared/bench/dev``) served as the robot's
+            camera instead of its own, or ``None``.
+        failsafe_after: Seconds without hearing the robot before the mission failsafe holds it.
+        failsafe_hold: Seconds of holding, link still lost, before the failsafe lands the robot.
     """
 
     robot: str = "sim"
@@ -91,6 +95,9 @@ class ConsoleConfig:
     fresh: bool = False
     resolution: float = 0.25
     margin: float = 0.35
+    captures: Path | None = None
+    failsafe_after: float = 3.0
+    failsafe_hold: float = 5.0
 
 
 class ConsoleApp:
@@ -132,7 +139,7 @@ class ConsoleApp:
                         "DRIVE THE ROBOT; there is no login. Use the default 127.0.0.1 unless you must.", cfg.host)
         from .link.world import DEFAULT_START
 
-        self.link = self._link_override if self._link_override is not None else self._open_link(cfg.robot)
+        self.link = self._link_override if self._link_override is not None else self._open_link(cfg.robot, cfg.captures)
         start = DEFAULT_START.translation
         ws = Workspace(resolution=cfg.resolution)
         self.session = session = Session(cfg.session_dir, start=start, workspace=ws, margin=cfg.margin)
@@ -192,16 +199,10 @@ class ConsoleApp:
 
     # --- robot link ---------------------------------------------------------------------------------
     @staticmethod
-    def _open_link(spec: str) -> Any:
-        try:
-            from .link import open_link
-        except ImportError:  # the link package without its opener: only the simulator can be built
-            if spec != "sim":
-                raise
-            from .link.sim import SimRobot
+    def _open_link(spec: str, captures: Path | None = None) -> Any:
+        from .link import open_link
 
-            return SimRobot()
-        return open_link(spec, connect=False)  # connected in the background: no vehicle, still a console
+        return open_link(spec, connect=False, captures=captures)  # connected in the background: no vehicle, still a console
 
     def _connect_robot(self) -> None:
         """Connect in the background (a missing vehicle must not stop the console) and stream state."""
@@ -258,7 +259,8 @@ class ConsoleApp:
         from .mission_view import make_runner
 
         assert self.session is not None
-        return make_runner(self.link, self.session)
+        return make_runner(self.link, self.session, failsafe_after=self.config.failsafe_after,
+                           failsafe_hold=self.config.failsafe_hold)
 
     # --- layout ----------------------------------------------------------------------------------------
     def _layout(self, perceiver: Perceiver) -> None:

@@ -25,9 +25,9 @@ def _positive(text: str) -> float:
     try:
         v = float(text)
     except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a number in metres, got {text!r}") from None
+        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
     if not (v > 0 and math.isfinite(v)):
-        raise argparse.ArgumentTypeError(f"expected a positive number in metres, got {text!r}")
+        raise argparse.ArgumentTypeError(f"expected a positive number, got {text!r}")
     return v
 
 
@@ -42,9 +42,9 @@ def _non_negative(text: str) -> float:
     try:
         v = float(text)
     except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a number in metres, got {text!r}") from None
+        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
     if not (v >= 0 and math.isfinite(v)):
-        raise argparse.ArgumentTypeError(f"expected a number >= 0 in metres, got {text!r}")
+        raise argparse.ArgumentTypeError(f"expected a number >= 0, got {text!r}")
     return v
 
 
@@ -78,6 +78,13 @@ def add_console_parser(subparsers: argparse._SubParsersAction) -> argparse.Argum
                    help="planning grid cell size [m], 0.05..1 (default 0.25)")
     p.add_argument("--margin", type=_non_negative, default=0.35,
                    help="robot radius: cells this close to an obstacle are dangerous [m] (default 0.35)")
+    p.add_argument("--captures", type=Path, default=None, metavar="DIR",
+                   help="serve real photos from DIR (the format of ../shared/bench/dev: image + JSON with K) "
+                        "as the robot's camera instead of its own")
+    p.add_argument("--failsafe-after", type=_positive, default=3.0, metavar="SECONDS",
+                   help="mission failsafe: hold the robot after this long without hearing it [s] (default 3)")
+    p.add_argument("--failsafe-hold", type=_non_negative, default=5.0, metavar="SECONDS",
+                   help="mission failsafe: land after holding this long with the link still lost [s] (default 5)")
     p.set_defaults(func=cmd_console)
     return p
 
@@ -93,12 +100,15 @@ def cmd_console(args: argparse.Namespace) -> int:
                         datefmt="%H:%M:%S")
     for noisy in ("websockets", "websockets.server", "httpx"):
         logging.getLogger(noisy).setLevel(logging.WARNING)
+    if args.captures is not None and not Path(args.captures).is_dir():
+        raise CliError(f"--captures {args.captures}: no such folder")
     if args.models is not None and not Path(args.models).is_dir():
         raise CliError(f"--models {args.models}: no such folder (fetch the models with: morphonavi models fetch NAME)")
     config = ConsoleConfig(
         robot=args.robot, scene_dir=args.scene if args.scene is not None else DEFAULT_SCENES,
         session_dir=args.session, host=args.host, port=args.port, models=args.models, fresh=args.fresh,
-        resolution=args.resolution, margin=args.margin,
+        resolution=args.resolution, margin=args.margin, captures=args.captures,
+        failsafe_after=args.failsafe_after, failsafe_hold=args.failsafe_hold,
     )
     app = ConsoleApp(config)
     try:

@@ -194,10 +194,15 @@ class ManagerRunner:
                 self._session.notify("Mission done", "the route now starts where the robot stands", "success")
 
 
-def make_runner(link: Any, session: Session) -> MissionRunner | None:
-    """The mission manager for ``link``, reporting to ``session``; ``None`` if unavailable."""
+def make_runner(link: Any, session: Session, *, failsafe_after: float = 3.0,
+                failsafe_hold: float = 5.0) -> MissionRunner | None:
+    """The mission manager for ``link``, reporting to ``session``; ``None`` if unavailable.
+
+    ``failsafe_after`` [s] without hearing the robot enters the failsafe (hold); ``failsafe_hold`` [s]
+    later, with the link still lost, the robot is landed.
+    """
     try:
         from .link.manager import MissionManager
     except ImportError:
         return None
-    return ManagerRunner(MissionManager(link), session)
+    return ManagerRunner(MissionManager(link, failsafe_after=failsafe_after, failsafe_hold=failsafe_hold), session)
