@@ -18,9 +18,9 @@ import logging
 import socket
 import threading
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Callable
+from typing import Any, Callable, Mapping
 
 import viser
 
@@ -84,6 +84,8 @@ class ConsoleConfig:
             camera instead of its own, or ``None``.
         failsafe_after: Seconds without hearing the robot before the mission failsafe holds it.
         failsafe_hold: Seconds of holding, link still lost, before the failsafe lands the robot.
+        link_options: Extra keyword options for :func:`console.link.open_link` (e.g. a MAVLink
+            ``config`` with the NED frame and the ground-motion command set).
     """
 
     robot: str = "sim"
@@ -98,6 +100,7 @@ class ConsoleConfig:
     captures: Path | None = None
     failsafe_after: float = 3.0
     failsafe_hold: float = 5.0
+    link_options: Mapping[str, Any] = field(default_factory=dict)
 
 
 class ConsoleApp:
@@ -139,7 +142,7 @@ class ConsoleApp:
                         "DRIVE THE ROBOT; there is no login. Use the default 127.0.0.1 unless you must.", cfg.host)
         from .link.world import DEFAULT_START
 
-        self.link = self._link_override if self._link_override is not None else self._open_link(cfg.robot, cfg.captures)
+        self.link = self._link_override if self._link_override is not None else self._open_link(cfg.robot, cfg.captures, cfg.link_options)
         start = DEFAULT_START.translation
         ws = Workspace(resolution=cfg.resolution)
         self.session = session = Session(cfg.session_dir, start=start, workspace=ws, margin=cfg.margin)
@@ -199,10 +202,10 @@ class ConsoleApp:
 
     # --- robot link ---------------------------------------------------------------------------------
     @staticmethod
-    def _open_link(spec: str, captures: Path | None = None) -> Any:
+    def _open_link(spec: str, captures: Path | None = None, options: Mapping[str, Any] | None = None) -> Any:
         from .link import open_link
 
-        return open_link(spec, connect=False, captures=captures)  # connected in the background: no vehicle, still a console
+        return open_link(spec, connect=False, captures=captures, **dict(options or {}))  # connected in the background: no vehicle, still a console
 
     def _connect_robot(self) -> None:
         """Connect in the background (a missing vehicle must not stop the console) and stream state."""

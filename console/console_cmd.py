@@ -48,6 +48,27 @@ def _non_negative(text: str) -> float:
     return v
 
 
+def _vec3(text: str) -> tuple[float, float, float]:
+    try:
+        v = [float(t) for t in text.split(",")]
+    except ValueError:
+        v = []
+    if len(v) != 3 or not all(math.isfinite(x) for x in v):
+        raise argparse.ArgumentTypeError(f"expected 'x,y,z' in metres, got {text!r}")
+    return (v[0], v[1], v[2])
+
+
+def link_options(args: argparse.Namespace) -> dict[str, object]:
+    """Keyword options for :func:`console.link.open_link` from the parsed arguments."""
+    if not str(args.robot).startswith("mavlink:"):
+        return {}
+    from .link.mavlink import GroundMotion, MavlinkConfig
+    from .link.ned import NedFrame
+
+    ned = NedFrame(origin=args.ned_origin, north_yaw=math.radians(args.north_deg))
+    return {"config": MavlinkConfig(ned=ned, ground=GroundMotion(command=args.ground_command))}
+
+
 def add_console_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:  # type: ignore[type-arg]
     """Register ``console`` on the ``morphonavi`` subcommand parsers; returns its parser."""
     p = subparsers.add_parser(
@@ -85,6 +106,13 @@ def add_console_parser(subparsers: argparse._SubParsersAction) -> argparse.Argum
                    help="mission failsafe: hold the robot after this long without hearing it [s] (default 3)")
     p.add_argument("--failsafe-hold", type=_non_negative, default=5.0, metavar="SECONDS",
                    help="mission failsafe: land after holding this long with the link still lost [s] (default 5)")
+    mav = p.add_argument_group("MAVLink robots (--robot mavlink:...)")
+    mav.add_argument("--ned-origin", type=_vec3, default=(0.0, 0.0, 0.0), metavar="X,Y,Z",
+                     help="world position [m] of the vehicle's local NED origin (EKF origin; default 0,0,0)")
+    mav.add_argument("--north-deg", type=float, default=90.0, metavar="DEG",
+                     help="direction of north, counter-clockwise from world +x [deg] (default 90: world +y)")
+    mav.add_argument("--ground-command", choices=("position", "velocity"), default="position",
+                     help="walking segments: position targets at ground height (default) or velocity targets")
     p.set_defaults(func=cmd_console)
     return p
 
@@ -108,7 +136,7 @@ def cmd_console(args: argparse.Namespace) -> int:
         robot=args.robot, scene_dir=args.scene if args.scene is not None else DEFAULT_SCENES,
         session_dir=args.session, host=args.host, port=args.port, models=args.models, fresh=args.fresh,
         resolution=args.resolution, margin=args.margin, captures=args.captures,
-        failsafe_after=args.failsafe_after, failsafe_hold=args.failsafe_hold,
+        failsafe_after=args.failsafe_after, failsafe_hold=args.failsafe_hold, link_options=link_options(args),
     )
     app = ConsoleApp(config)
     try:

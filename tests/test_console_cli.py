@@ -36,3 +36,21 @@ def test_captures_folder_becomes_the_robots_camera() -> None:
         link.close()
     assert shot.source == "captures-folder"
     assert shot.image.shape[:2] == (shot.intrinsics.height, shot.intrinsics.width)
+
+
+def test_mavlink_options_become_the_links_frame_and_ground_commands() -> None:
+    import math
+
+    from console.console_cmd import link_options
+
+    args = build_parser().parse_args(["console", "--robot", "mavlink:udpin:127.0.0.1:0", "--ned-origin", "2.5,0.7,0",
+                                      "--north-deg", "0", "--ground-command", "velocity"])
+    cfg = link_options(args)["config"]
+    assert cfg.ned.origin == (2.5, 0.7, 0.0) and cfg.ned.north_yaw == pytest.approx(0.0)
+    assert cfg.ground.command == "velocity"
+    # north = world +x: a point 1 m along +x from the origin is 1 m north
+    assert cfg.ned.to_ned((3.5, 0.7, 0.0)) == pytest.approx((1.0, 0.0, 0.0))
+    assert link_options(build_parser().parse_args(["console"])) == {}
+    with pytest.raises(SystemExit):
+        build_parser().parse_args(["console", "--ned-origin", "1,2"])
+    assert math.isfinite(cfg.ned.north_yaw)
