@@ -32,6 +32,7 @@ from pipeline.distance import (
 from pipeline.geometry import CameraError, CameraMount, Intrinsics, Pose, camera_pose_in_world
 from pipeline.models.base import DepthMap, Detection, Detector, Prompt, Segmenter
 from pipeline.models.nms import nms
+from pipeline.orientation import length_axis_from_points
 from pipeline.placement import GeometricEstimate, centre_on_ray, geometric_estimate, heading_in_frame
 from pipeline.scene import Capture, Scene, SceneObject, Source
 from pipeline.tiled_detection import detect_tiled
@@ -112,7 +113,13 @@ class MapperConfig:
         yaw_from_fit: Give objects the yaw of the fitted 3D box instead of facing the camera. Off by
             default: a 2D box hardly constrains the yaw (a yaw and its mirror image about the viewing
             ray give the same box; on noise-free renders the fitted yaw of near-square footprints
-            was off by up to ~50 degrees).
+            was off by up to ~50 degrees). :attr:`yaw_from_depth` takes precedence where it applies.
+        yaw_from_depth: Give known-size objects the yaw of the footprint fitted to their mask's pixels
+            back-projected with the metric depth (:func:`~pipeline.orientation.length_axis_from_points`;
+            facing the camera where the points do not determine it). ``None`` (default): only when the
+            depth is trustworthy metric depth: exact (``exact_depth`` or a backend declaring it), or a
+            metric map that adaptive fusion trusts (spread against the size priors within
+            ``trust_depth_spread``). ``True``: whenever the depth map has a metric scale; ``False``: never.
     """
 
     w_geometric: float = 0.8
@@ -136,6 +143,7 @@ class MapperConfig:
     yaw_from_fit: bool = False
     trust_depth_spread: float = 0.3
     exact_depth: bool = False
+    yaw_from_depth: bool | None = None
 
     def __post_init__(self) -> None:
         if self.w_geometric < 0 or self.w_depth < 0 or self.w_geometric + self.w_depth <= 0:
@@ -176,6 +184,8 @@ class MappedObject:
     center_cam: np.ndarray | None = None
     object_id: str | None = None
     skipped: str | None = None
+    length_axis_cam: np.ndarray | None = None
+    """Unit horizontal length axis (camera frame) fitted from the depth points, when it was."""
 
     @property
     def geometric_z(self) -> float | None:
@@ -441,6 +451,8 @@ class Mapper:
         weights, fusion_note = self._fusion_weights(objects, scale)
         for obj in objects:
             self._place(obj, scale, intrinsics, weights)
+        if self._yaw_from_depth(scale, weights[3]):
+            self._orient(objects, depth_map, scale, intrinsics, gravity)  # type: ignore[arg-type]
         timings["distance"] = time.perf_counter() - t0
 
         # --- scene ---------------------------------------------------------------------------------
@@ -645,6 +657,27 @@ class Mapper:
         if not obj.size_known:
             obj.size = self._measured_size(obj, surface if surface is not None else obj.fused.distance, intr)
 
+    def _yaw_from_depth(self, scale: DepthScale | None, trusted: bool) -> bool:
+        """Whether objects get their yaw from the depth points (see :attr:`MapperConfig.yaw_from_depth`)."""
+        if scale is None:
+            return False
+        if self.config.yaw_from_depth is not None:
+            return self.config.yaw_from_depth
+        return self._exact_depth or (trusted and scale.kind == "metric")
+
+    @staticmethod
+    def _orient(objects: list[MappedObject], depth_map: DepthMap, scale: DepthScale, intr: Intrinsics,
+                gravity: np.ndarray) -> None:
+        """Fit the length axis (camera frame) of every placed known-size object with a mask from its
+        back-projected depth points [m]."""
+        todo = [o for o in objects if o.center_cam is not None and o.size_known and o.mask is not None
+                and o.mask.any()]
+        if not todo:
+            return
+        depth_m = np.asarray(scale.to_metric(depth_map.values), dtype=np.float64)
+        for obj in todo:
+            obj.length_axis_cam = length_axis_from_points(obj.mask, depth_m, intr, gravity, obj.size)  # type: ignore[arg-type]
+
     def _half_depth(self, obj: MappedObject, surface_z: float, intr: Intrinsics) -> float:
         """Half the object's depth [m] along the ray: for a known size, the expected half extent of
         its footprint at unknown yaw, ``(w + l) / pi``; for an unknown size, half its measured width
@@ -680,7 +713,11 @@ class Mapper:
             c_cam = obj.center_cam
             c_robot = robot_from_cam.apply(c_cam)
             c_world = world_from_cam.apply(c_cam)
-            if self.config.yaw_from_fit and obj.geometric is not None and obj.geometric.axes is not None:
+            if obj.length_axis_cam is not None:
+                axis = np.asarray(obj.length_axis_cam, dtype=np.float64)
+                if float(axis @ -c_cam) < 0:  # length axis (the object's front) towards the camera
+                    axis = -axis
+            elif self.config.yaw_from_fit and obj.geometric is not None and obj.geometric.axes is not None:
                 axis = np.asarray(obj.geometric.axes[0], dtype=np.float64)
                 if float(axis @ -c_cam) < 0:  # length axis (the object's front) towards the camera
                     axis = -axis

@@ -149,8 +149,14 @@ def test_objects_land_at_their_world_positions(placement: str) -> None:
     assert np.allclose(cap.camera_position, WORLD_FROM_CAM.translation)
 
 
-def test_objects_face_the_camera_by_default() -> None:
-    with Mapper(gt_bundle(), CATALOG) as mapper:
+@pytest.mark.parametrize("untrusted", [False, True])
+def test_objects_face_the_camera_without_yaw_from_depth(untrusted: bool) -> None:
+    """Exact depth with ``yaw_from_depth=False``, or by default an untrusted metric depth model."""
+    if untrusted:
+        bundle, config = gt_bundle(MetricModelDepth()), MapperConfig()
+    else:
+        bundle, config = gt_bundle(), MapperConfig(yaw_from_depth=False)
+    with Mapper(bundle, CATALOG, config) as mapper:
         scene = mapper.map_image(SCENE["image"], INTR, MOUNT, ROBOT)
     cam = np.array(WORLD_FROM_CAM.translation)
     for o in scene.objects:
@@ -442,3 +448,37 @@ def test_exact_depth_decides_and_is_not_rescaled() -> None:
     assert objs["crate"].source.method == "depth"
     assert objs["crate"].source.distances["fused"] == pytest.approx(objs["crate"].source.distances["depth"])
     assert "exact depth" in " ".join(res.scene.captures[0].models.values())
+
+
+def _yaw_error_mod_pi(a: float, b: float) -> float:
+    d = (a - b) % math.pi
+    return min(d, math.pi - d)
+
+
+def test_exact_depth_gives_objects_their_yaw() -> None:
+    """With exact depth the crate (yaw 0.3 rad, w 0.8 / l 0.6 m) gets its yaw from its depth points;
+    without the option it faces the camera, about 70 degrees off."""
+    crate_yaw = OBJECTS[0][3]
+    with Mapper(gt_bundle(), CATALOG) as mapper:
+        res = mapper.run(SCENE["image"], INTR, MOUNT, ROBOT, capture_id="cap-1")
+    crate = _by_label(res.scene)["crate"]
+    assert _yaw_error_mod_pi(crate.yaw, crate_yaw) < math.radians(3.0)
+    with Mapper(gt_bundle(), CATALOG, MapperConfig(yaw_from_depth=False)) as mapper:
+        off = _by_label(mapper.run(SCENE["image"], INTR, MOUNT, ROBOT, capture_id="cap-1").scene)["crate"]
+    assert _yaw_error_mod_pi(off.yaw, crate_yaw) > math.radians(30.0)
+    assert off.position == pytest.approx(crate.position)  # the yaw does not move the centre
+
+
+def test_untrusted_metric_depth_keeps_objects_facing_the_camera() -> None:
+    """A metric depth *model* with too few references to be trusted: no yaw from its points by
+    default; forced on, it gives the crate's yaw too (the stub is exact)."""
+    crate_yaw = OBJECTS[0][3]
+    with Mapper(gt_bundle(MetricModelDepth()), CATALOG) as mapper:
+        res = mapper.run(SCENE["image"], INTR, MOUNT, ROBOT, capture_id="cap-1")
+    crate = _by_label(res.scene)["crate"]
+    cam = np.asarray(WORLD_FROM_CAM.translation)
+    to_cam = cam[:2] - np.asarray(crate.position[:2])
+    assert crate.yaw == pytest.approx(math.atan2(to_cam[1], to_cam[0]), abs=1e-6)
+    with Mapper(gt_bundle(MetricModelDepth()), CATALOG, MapperConfig(yaw_from_depth=True)) as mapper:
+        forced = _by_label(mapper.run(SCENE["image"], INTR, MOUNT, ROBOT, capture_id="cap-1").scene)["crate"]
+    assert _yaw_error_mod_pi(forced.yaw, crate_yaw) < math.radians(3.0)
