@@ -21,12 +21,19 @@ def _port(text: str) -> int:
     return v
 
 
-def _positive(text: str) -> float:
+def _finite(text: str) -> float:
     try:
         v = float(text)
     except ValueError:
         raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
-    if not (v > 0 and math.isfinite(v)):
+    if not math.isfinite(v):
+        raise argparse.ArgumentTypeError(f"expected a finite number, got {text!r}")
+    return v
+
+
+def _positive(text: str) -> float:
+    v = _finite(text)
+    if v <= 0:
         raise argparse.ArgumentTypeError(f"expected a positive number, got {text!r}")
     return v
 
@@ -39,11 +46,8 @@ def _resolution(text: str) -> float:
 
 
 def _non_negative(text: str) -> float:
-    try:
-        v = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
-    if not (v >= 0 and math.isfinite(v)):
+    v = _finite(text)
+    if v < 0:
         raise argparse.ArgumentTypeError(f"expected a number >= 0, got {text!r}")
     return v
 
@@ -109,7 +113,7 @@ def add_console_parser(subparsers: argparse._SubParsersAction) -> argparse.Argum
     mav = p.add_argument_group("MAVLink robots (--robot mavlink:...)")
     mav.add_argument("--ned-origin", type=_vec3, default=(0.0, 0.0, 0.0), metavar="X,Y,Z",
                      help="world position [m] of the vehicle's local NED origin (EKF origin; default 0,0,0)")
-    mav.add_argument("--north-deg", type=float, default=90.0, metavar="DEG",
+    mav.add_argument("--north-deg", type=_finite, default=90.0, metavar="DEG",
                      help="direction of north, counter-clockwise from world +x [deg] (default 90: world +y)")
     mav.add_argument("--ground-command", choices=("position", "velocity"), default="position",
                      help="walking segments: position targets at ground height (default) or velocity targets")
