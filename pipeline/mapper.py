@@ -281,15 +281,9 @@ def load_mapping_models(
     ones (:data:`LIGHT_MODELS`, tens of milliseconds) get one onnxruntime thread and the rest every
     core (``threads`` forces one count for all).
     """
-    from pipeline.models.base import ModelMissingError
-    from pipeline.models.loader import ModelBundle, load_model
-    from pipeline.models.registry import get_spec, locate, search_dirs, set_members
+    from pipeline.models.loader import ModelBundle, load_model, present_set_members
 
-    names = set_members(set_name)
-    missing = [n for n in names if not get_spec(n).remote and locate(n, model_dir) is None]
-    if missing:
-        dirs = ", ".join(str(d) for d in search_dirs(model_dir))
-        raise ModelMissingError(missing, f"model set {set_name!r}; looked in {dirs}")
+    names = present_set_members(set_name, model_dir)
     det_name, seg_name, depth_name = names
 
     def n_threads(name: str) -> int | None:

@@ -71,6 +71,20 @@ def load_model(
     raise AssertionError(f"registry entry {name!r} has an unknown backend {spec.backend!r}")
 
 
+def present_set_members(set_name: str, model_dir: Path | str | None = None) -> tuple[str, str, str]:
+    """The set's model names (detector, segmenter, depth), after checking their files are present.
+
+    Raises:
+        ModelMissingError: Naming ``morphonavi models fetch NAME`` for every missing model.
+    """
+    names = set_members(set_name)
+    missing = [n for n in names if not get_spec(n).remote and locate(n, model_dir) is None]
+    if missing:
+        dirs = ", ".join(str(d) for d in search_dirs(model_dir))
+        raise ModelMissingError(missing, f"model set {set_name!r}; looked in {dirs}")
+    return names
+
+
 def load_models(
     set_name: str = "offline",
     model_dir: Path | str | None = None,
@@ -86,11 +100,7 @@ def load_models(
             for every missing model of the set.
         ModelError: Unknown set, or a model does not load.
     """
-    names = set_members(set_name)
-    missing = [n for n in names if not get_spec(n).remote and locate(n, model_dir) is None]
-    if missing:
-        dirs = ", ".join(str(d) for d in search_dirs(model_dir))
-        raise ModelMissingError(missing, f"model set {set_name!r}; looked in {dirs}")
+    names = present_set_members(set_name, model_dir)
     det_name, seg_name, depth_name = names
     return ModelBundle(
         detector=load_model(det_name, model_dir, threads=threads, label_map=label_map),
