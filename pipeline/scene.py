@@ -155,21 +155,6 @@ class Scene:
         """A copy holding ``objects`` instead."""
         return replace(self, objects=tuple(objects))
 
-    def merged(self, other: "Scene") -> "Scene":
-        """This scene plus ``other``'s objects and captures; clashing ids get a suffix."""
-        taken = {o.id for o in self.objects}
-        added: list[SceneObject] = []
-        for obj in other.objects:
-            new_id, n = obj.id, 1
-            while new_id in taken:
-                n += 1
-                new_id = f"{obj.id}-{n}"
-            taken.add(new_id)
-            added.append(replace(obj, id=new_id))
-        known = {c.id for c in self.captures}
-        caps = self.captures + tuple(c for c in other.captures if c.id not in known)
-        return Scene(objects=self.objects + tuple(added), captures=caps)
-
     def to_dict(self) -> dict[str, Any]:
         return scene_to_dict(self)
 

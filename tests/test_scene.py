@@ -85,14 +85,6 @@ def test_failed_save_leaves_previous_file(tmp_path: Path, monkeypatch: pytest.Mo
     assert [f.name for f in tmp_path.iterdir()] == ["scene.json"]
 
 
-def test_merge_renames_clashing_ids() -> None:
-    a = _scene()
-    merged = a.merged(a)
-    ids = [o.id for o in merged.objects]
-    assert len(ids) == 4 and len(set(ids)) == 4
-    assert len(merged.captures) == 1
-
-
 def test_duplicate_ids_rejected_in_constructor() -> None:
     o = _scene().objects[0]
     with pytest.raises(SceneError, match="duplicate"):
