@@ -4,7 +4,8 @@ Each object is drawn with its catalog proxy model (a unit-cube GLB in the object
 the heading = length, y = width, z = up), scaled by ``(l, w, h)``, turned by its yaw about +z and
 placed at its box centre (world frame [m]). Labels without a catalog model, or a missing catalog,
 fall back to a plain box. Clicking an object (or choosing it in the list) selects it: its details
-appear in the panel, where it can be moved or deleted.
+appear in the panel, where it can be moved (typed centre and yaw, or dragged with a gizmo that slides
+it on its support and turns it about +z) or deleted.
 """
 
 from __future__ import annotations
@@ -33,6 +34,12 @@ Vec3 = tuple[float, float, float]
 def yaw_wxyz(yaw: float) -> tuple[float, float, float, float]:
     """Quaternion ``(w, x, y, z)`` of a turn by ``yaw`` [rad] about +z."""
     return (math.cos(yaw / 2), 0.0, 0.0, math.sin(yaw / 2))
+
+
+def wxyz_yaw(wxyz: Sequence[float]) -> float:
+    """Heading [rad] about +z of a rotation given as a quaternion ``(w, x, y, z)``."""
+    w, x, y, z = (float(v) for v in wxyz)
+    return math.atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z))
 
 
 def label_color(label: str) -> tuple[int, int, int]:
@@ -198,6 +205,8 @@ class ObjectsView:
         delete.on_click(self._on_delete)
         close.on_click(lambda _e: self._session.select(None))
         self._selection_box: Any = None
+        self._gizmo: Any = None
+        self._gizmo_for: tuple[str, Vec3, float] | None = None  # (id, centre, yaw) the gizmo was placed at
         session.subscribe(self._on_event)
         self.redraw()
 
@@ -277,6 +286,7 @@ class ObjectsView:
             if self._selection_box is not None:
                 self._selection_box.remove()
                 self._selection_box = None
+            self._place_gizmo(obj)
             if obj is None:
                 self._folder.visible = False
                 if self._chooser.value != NONE_CHOICE and self._chooser.value not in self._drawn:
@@ -293,6 +303,68 @@ class ObjectsView:
             self._folder.visible = True
             if self._chooser.value != obj.id:
                 self._chooser.value = obj.id
+
+    def _place_gizmo(self, obj: SceneObject | None) -> None:
+        """Put the drag gizmo on the selected object (only x / y slides and the turn about +z)."""
+        at = None if obj is None else (obj.id, obj.position, obj.yaw)
+        if at == self._gizmo_for:
+            return  # unchanged: keep it (re-creating it would cut a drag in another tab)
+        if self._gizmo is not None:
+            self._gizmo.remove()
+            self._gizmo = None
+        self._gizmo_for = at
+        if obj is None:
+            return
+        self._gizmo = self._server.scene.add_transform_controls(
+            "/selection_gizmo", scale=0.4 + 0.6 * max(obj.size), active_axes=(True, True, False),
+            depth_test=False, position=obj.position, wxyz=yaw_wxyz(obj.yaw),
+        )
+        oid = obj.id
+
+        async def dragged(event: Any) -> None:
+            # async keeps the phases in order; the move itself (grid rebuild) runs off the event loop
+            pose = (tuple(float(v) for v in event.target.position), wxyz_yaw(event.target.wxyz))
+            if event.phase == "update" and self._selection_box is not None:
+                self._selection_box.position, self._selection_box.wxyz = pose[0], yaw_wxyz(pose[1])
+            elif event.phase == "end":
+                threading.Thread(target=self._drop_and_tell, args=(oid, pose[0][:2], pose[1], event.client),
+                                 daemon=True).start()
+
+        self._gizmo.on_update(dragged)
+
+    def gizmo_pose(self) -> tuple[Vec3, float] | None:
+        """Centre (world [m]) and yaw [rad] of the drag gizmo, ``None`` when nothing is selected."""
+        with self._lock:
+            g = self._gizmo
+            return None if g is None else (tuple(float(v) for v in g.position), wxyz_yaw(g.wxyz))  # type: ignore[return-value]
+
+    def drop(self, object_id: str, xy: Sequence[float], yaw: float) -> list[str]:
+        """Finish a gizmo drag: the object keeps its height and takes the new ``xy`` [m] and ``yaw`` [rad].
+
+        Raises:
+            SessionError: The object is gone or the place is refused; the gizmo goes back to the object.
+        """
+        try:
+            try:
+                z = self._session.scene.object(object_id).position[2]
+            except KeyError:
+                raise SessionError(f"no object {object_id!r} in the map (was it deleted in another tab?)") from None
+            return self._session.move_object(object_id, (float(xy[0]), float(xy[1]), z), yaw)
+        except SessionError:
+            with self._lock:
+                self._gizmo_for = None  # re-place it where the object still is
+            self._show_selection()
+            raise
+
+    def _drop_and_tell(self, object_id: str, xy: Sequence[float], yaw: float, client: Any) -> None:
+        try:
+            notes = self.drop(object_id, xy, yaw)
+        except SessionError as exc:
+            if client is not None:
+                client.add_notification("Cannot move", str(exc), color="red", auto_close_seconds=6.0)
+            return
+        if client is not None:
+            client.add_notification("Moved", "; ".join(notes) or "grid rebuilt", color="blue", auto_close_seconds=6.0)
 
     # --- operator actions -----------------------------------------------------------------------
     def _notify(self, event: Any, title: str, body: str, color: str = "red") -> None:

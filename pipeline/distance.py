@@ -25,6 +25,8 @@ from typing import Literal, Sequence
 
 import numpy as np
 
+from pipeline.boxes import BoxError, parse_box
+
 DepthKind = Literal["metric", "relative", "inverse_relative"]
 """What a depth map holds: metres; depth up to an unknown scale; inverse depth up to scale and shift."""
 
@@ -40,14 +42,9 @@ class DistanceError(ValueError):
 def check_box(box: Box) -> tuple[float, float, float, float]:
     """The box as four finite floats with ``x2 > x1`` and ``y2 > y1``; :class:`DistanceError` otherwise."""
     try:
-        x1, y1, x2, y2 = (float(v) for v in box)
-    except (TypeError, ValueError):
-        raise DistanceError(f"box must be 4 numbers (x1, y1, x2, y2) [px], got {box!r}") from None
-    if not all(math.isfinite(v) for v in (x1, y1, x2, y2)):
-        raise DistanceError(f"box must be finite, got {box!r}")
-    if x2 <= x1 or y2 <= y1:
-        raise DistanceError(f"box must have x2 > x1 and y2 > y1, got {box!r}")
-    return x1, y1, x2, y2
+        return parse_box(box)
+    except BoxError as exc:
+        raise DistanceError(str(exc)) from None
 
 
 def _positive(name: str, value: float) -> float:

@@ -10,7 +10,7 @@ import pytest
 
 from pipeline.scene import SceneObject
 from planner.grid import Workspace, build_grid
-from planner.mission import Mission, MissionError, SegmentKind, mission_from_cells, simplify
+from planner.mission import Mission, MissionError, mission_from_cells, simplify
 
 
 def _grid(objs=()):

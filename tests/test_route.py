@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from pipeline.scene import SceneObject
-from planner.grid import CostWeights, Workspace, build_grid
+from planner.grid import Workspace, build_grid
 from planner.route import Route
 
 

@@ -15,7 +15,6 @@ import time
 from typing import Sequence
 
 import numpy as np
-import pytest
 
 from console.link.base import RunStatus, SegmentRun
 from console.link.manager import MissionManager, MissionStatus

@@ -19,6 +19,8 @@ from typing import Literal, Protocol, Sequence, runtime_checkable
 
 import numpy as np
 
+from pipeline.boxes import BoxError, clip_box, parse_box
+
 Box = tuple[float, float, float, float]
 """``(x1, y1, x2, y2)`` in pixels of the original image, ``x1 <= x2`` and ``y1 <= y2``."""
 
@@ -195,18 +197,12 @@ def check_image(image: object, who: str = "model") -> np.ndarray:
 def check_box(box: Sequence[float], width: int, height: int, who: str = "model") -> Box:
     """``box`` as floats clipped to the image, or :class:`ModelError` when it is malformed or empty."""
     try:
-        x1, y1, x2, y2 = (float(v) for v in box)
-    except (TypeError, ValueError):
-        raise ModelError(f"{who}: a box is 4 numbers (x1, y1, x2, y2), got {box!r}") from None
-    if not all(math.isfinite(v) for v in (x1, y1, x2, y2)):
-        raise ModelError(f"{who}: box has non-finite coordinates: {box!r}")
-    if x2 < x1 or y2 < y1:
-        raise ModelError(f"{who}: box must have x1 <= x2 and y1 <= y2, got {box!r}")
-    cx1, cx2 = min(max(x1, 0.0), width), min(max(x2, 0.0), width)
-    cy1, cy2 = min(max(y1, 0.0), height), min(max(y2, 0.0), height)
-    if cx2 - cx1 <= 0 or cy2 - cy1 <= 0:
+        clipped = clip_box(parse_box(box, allow_empty=True), width, height)
+    except BoxError as exc:
+        raise ModelError(f"{who}: {exc}") from None
+    if clipped is None:
         raise ModelError(f"{who}: box {box!r} does not overlap the {width}x{height} image")
-    return (cx1, cy1, cx2, cy2)
+    return clipped
 
 
 def check_prompts(prompts: Sequence[Prompt], who: str = "detector") -> list[Prompt]:
