@@ -4,7 +4,10 @@ Each graph computes something simple but checkable, so tests exercise the backen
 post-processing without any downloaded weights:
 
 - OWL: text embedding = sum of per-token colour vectors; patch embedding = mean normalised colour
-  of each patch; ``logits = 2 * dot - 4``; ``pred_boxes`` = the patch cells.
+  of each patch; ``logits = 2 * dot - 4`` (-1e6 for padded queries, as the real class head masks
+  queries whose first token is 0); ``pred_boxes`` = the patch cells. As in the real export, the
+  class head reads the ``text_embeds`` output (or, with ``head_reads_embeds=False``, a tensor
+  upstream of it, so the graph cannot be cut at the text embeddings).
 - SAM: the encoder average-pools the image; the decoder's mask logit is the signed distance to
   the prompt box, computed in the ORIGINAL frame from ``orig_im_size`` and the resized-frame box,
   and is negative everywhere unless the point labels are (2, 3, -1).
@@ -75,7 +78,8 @@ def write_tokenizer(path: Path, vocab: dict[str, int] | None = None) -> Path:
     return path
 
 
-def owl_model(path: Path, image_size: int = 32, patch: int = 8, vocab: dict[str, int] | None = None) -> Path:
+def owl_model(path: Path, image_size: int = 32, patch: int = 8, vocab: dict[str, int] | None = None,
+              head_reads_embeds: bool = True) -> Path:
     """OWL export signature: (input_ids, pixel_values, attention_mask) -> (logits, pred_boxes,
     text_embeds, image_embeds); colour words match patches of that colour."""
     vocab = vocab or owl_vocab()
@@ -97,10 +101,14 @@ def owl_model(path: Path, image_size: int = 32, patch: int = 8, vocab: dict[str,
         ),
         helper.make_node("Transpose", ["pooled"], ["image_embeds"], perm=[0, 2, 3, 1]),  # [1, g, g, 3]
         helper.make_node("Reshape", ["image_embeds", "patch_shape"], ["patches"]),  # [1, P, 3]
-        helper.make_node("Transpose", ["text_vec"], ["text_t"], perm=[1, 0]),  # [3, Q]
+        (helper.make_node("Transpose", ["text_embeds"], ["text_t"], perm=[0, 2, 1]) if head_reads_embeds  # [1, 3, Q]
+         else helper.make_node("Transpose", ["text_vec"], ["text_t"], perm=[1, 0])),  # [3, Q]
         helper.make_node("MatMul", ["patches", "text_t"], ["dot"]),  # [1, P, Q]
         helper.make_node("Mul", ["dot", "two"], ["dot2"]),
-        helper.make_node("Sub", ["dot2", "four"], ["logits"]),
+        helper.make_node("Sub", ["dot2", "four"], ["raw_logits"]),
+        helper.make_node("Gather", ["input_ids", "zero"], ["first_tok"], axis=1),  # [Q]
+        helper.make_node("Greater", ["first_tok", "zero"], ["query_mask"]),
+        helper.make_node("Where", ["query_mask", "raw_logits", "masked"], ["logits"]),
         helper.make_node("Identity", ["boxes_const"], ["pred_boxes"]),
     ]
     inits = [
@@ -111,6 +119,8 @@ def owl_model(path: Path, image_size: int = 32, patch: int = 8, vocab: dict[str,
         _const("patch_shape", np.array([1, g * g, 3], np.int64)),
         _const("two", np.float32(2.0)),
         _const("four", np.float32(4.0)),
+        _const("zero", np.int64(0)),
+        _const("masked", np.float32(-1e6)),
         _const("boxes_const", boxes),
     ]
     return _save(

@@ -118,3 +118,55 @@ def test_missing_or_corrupt_tokenizer(tmp_path: Path) -> None:
     (d / "tokenizer.json").unlink()
     with pytest.raises(ModelError, match="missing tokenizer file"):
         OwlDetector.from_dir(d)
+
+
+# --- text embeddings cached per vocabulary (the export cut at text_embeds) -----------------------
+
+
+def _detections(found: list) -> list[tuple]:
+    return [(d.label, d.prompt, tuple(round(v, 4) for v in d.box), round(d.score, 6)) for d in found]
+
+
+def test_text_tower_runs_once_per_vocabulary_and_matches_the_whole_graph(tmp_path: Path) -> None:
+    d = _model_dir(tmp_path)
+    cached = OwlDetector.from_dir(d, variant="owlv2", score_threshold=0.5)
+    whole = OwlDetector.from_dir(d, variant="owlv2", score_threshold=0.5, cache_text=False)
+    assert cached.parts is not None and cached.text_cache_off is None
+    assert set(cached.parts.image_inputs) == {"pixel_values", "text_embeds", "input_ids"}  # no attention_mask
+    assert whole.parts is None and whole.text_cache_off == "disabled"
+
+    first = cached.detect(_image(), PROMPTS)
+    assert _detections(first) == _detections(whole.detect(_image(), PROMPTS))
+    assert {x.label for x in first} == {"red_thing", "green_thing"}
+    assert cached.text_tower_runs == 1
+    other = np.full((64, 128, 3), WHITE, dtype=np.uint8)
+    other[32:64, 0:32] = (0, 0, 255)
+    (blue,) = cached.detect(other, PROMPTS)  # a new photo, same vocabulary: no text tower
+    assert blue.label == "blue_thing" and cached.text_tower_runs == 1
+    cached.detect(_image(), PROMPTS[:2])  # another vocabulary
+    assert cached.text_tower_runs == 2
+    cached.detect(_image(), PROMPTS)
+    assert cached.text_tower_runs == 2  # still cached
+
+
+def test_padded_queries_are_masked_in_the_image_part(tmp_path: Path) -> None:
+    """The image part still reads input_ids: a query whose first token is padding never scores."""
+    det = OwlDetector.from_dir(_model_dir(tmp_path), variant="owlv2", score_threshold=0.5)
+    ids, _ = det.tokens(["a red box"])
+    pixel_values, _ = det.preprocess(_image())
+    embeds = det.text_embeddings(["a red box"])
+    logits, _ = det.parts.image.run(None, {"pixel_values": pixel_values, "text_embeds": embeds, "input_ids": ids})
+    assert logits.max() > 0
+    logits, _ = det.parts.image.run(None, {"pixel_values": pixel_values, "text_embeds": embeds,
+                                            "input_ids": np.zeros_like(ids)})
+    assert logits.max() < -1e5
+
+
+def test_an_export_that_cannot_be_cut_runs_whole(tmp_path: Path) -> None:
+    d = _model_dir(tmp_path)
+    owl_model(d / "model.onnx", image_size=32, patch=8, head_reads_embeds=False)
+    det = OwlDetector.from_dir(d, variant="owlv2", score_threshold=0.5)
+    assert det.parts is None and "does not read the text tower only through 'text_embeds'" in det.text_cache_off
+    assert {x.label for x in det.detect(_image(), PROMPTS)} == {"red_thing", "green_thing"}
+    with pytest.raises(ModelError, match="not cached"):
+        det.text_embeddings(["a red box"])

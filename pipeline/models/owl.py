@@ -13,14 +13,19 @@ OWLv2 pads the image to a square at the bottom/right with grey 0.5 and resizes i
 boxes are relative to the padded square of side max(H, W).
 
 Post-processing: score = sigmoid(max over queries), the best query names the class; boxes above
-``score_threshold`` pass a class-wise NMS. The export runs the text tower with every image, so the
-text side cannot be cached as embeddings; the tokenised prompts are cached per prompt tuple.
+``score_threshold`` pass a class-wise NMS.
+
+The export runs the text tower with every image. At load the graph is cut at ``text_embeds``
+(:mod:`pipeline.models.owl_split`), so each vocabulary's text embeddings are computed once and
+cached; when an export cannot be cut, the whole graph runs (and the tokens are still cached).
 Tokenisation uses the ``tokenizers`` package and the export's ``tokenizer.json``.
 """
 
 from __future__ import annotations
 
+import logging
 import time
+from collections import OrderedDict
 from pathlib import Path
 from typing import Any, Literal, Sequence
 
@@ -30,7 +35,10 @@ import numpy as np
 from pipeline.models.base import Detection, ModelError, Prompt, check_image, check_prompts
 from pipeline.models.hub_config import parse_size, parse_triplet, read_json
 from pipeline.models.nms import batched_nms
+from pipeline.models.owl_split import TEXT_EMBEDS, OwlParts, SplitError, split_owl
 from pipeline.models.session import IOSignature, TensorSpec, open_session, run
+
+log = logging.getLogger(__name__)
 
 Variant = Literal["owlv2", "owlvit"]
 
@@ -39,6 +47,7 @@ CLIP_STD = (0.26862954, 0.26130258, 0.27577711)
 DEFAULT_SIZE: dict[str, int] = {"owlv2": 960, "owlvit": 768}
 MAX_TEXT_LENGTH = 16
 OWLV2_PAD_VALUE = 0.5
+TEXT_CACHE_SIZE = 8  # vocabularies whose text embeddings are kept
 
 SIGNATURE = IOSignature(
     inputs=(
@@ -126,6 +135,8 @@ class OwlDetector:
         score_threshold: Minimum sigmoid score.
         nms_iou: IoU above which a lower-scoring box of the same class is dropped.
         threads: onnxruntime intra-op threads (default: every core).
+        cache_text: Cut the graph at ``text_embeds`` so each vocabulary's text tower runs once
+            (falls back to the whole graph when the export cannot be cut; see ``text_cache_off``).
     """
 
     def __init__(
@@ -139,6 +150,7 @@ class OwlDetector:
         nms_iou: float = 0.5,
         threads: int | None = None,
         name: str | None = None,
+        cache_text: bool = True,
     ) -> None:
         if variant not in DEFAULT_SIZE:
             raise ModelError(f"OWL variant must be 'owlv2' or 'owlvit', got {variant!r}")
@@ -148,8 +160,20 @@ class OwlDetector:
         self.nms_iou = float(nms_iou)
         pre = preprocessor or {}
         where = f"model {self.name!r} preprocessor config"
-        self.session = open_session(model_path, SIGNATURE, threads=threads, model_name=self.name)
-        fixed = next(i for i in self.session.get_inputs() if i.name == "pixel_values").shape[2:4]
+        self.parts: OwlParts | None = None
+        self.text_cache_off: str | None = "disabled" if not cache_text else None
+        self.session: Any = None
+        if cache_text and Path(model_path).is_file():
+            try:
+                self.parts = split_owl(model_path, SIGNATURE, f"model {self.name!r} ({model_path})", threads)
+            except SplitError as exc:
+                self.text_cache_off = str(exc)
+                log.info("text embeddings not cached, running the whole graph: %s", exc)
+        if self.parts is None:
+            self.session = open_session(model_path, SIGNATURE, threads=threads, model_name=self.name)
+            fixed = next(i for i in self.session.get_inputs() if i.name == "pixel_values").shape[2:4]
+        else:
+            fixed = next(t for t in self.parts.signature.inputs if t.name == "pixel_values").shape[2:4]
         if "size" in pre:
             self.input_hw = parse_size(pre["size"], where)
         elif all(isinstance(d, int) for d in fixed):
@@ -160,6 +184,8 @@ class OwlDetector:
         self.std = np.array(parse_triplet(pre.get("image_std"), CLIP_STD, where), dtype=np.float32)
         self.tokens = ClipTokens(tokenizer_path)
         self.last_timings: dict[str, float] = {}
+        self.text_tower_runs = 0  # how often the text embeddings were computed (split graph only)
+        self._text_cache: OrderedDict[tuple[str, ...], np.ndarray] = OrderedDict()
 
     @classmethod
     def from_dir(cls, model_dir: Path | str, variant: Variant = "owlv2", **kwargs: Any) -> OwlDetector:
@@ -194,6 +220,24 @@ class OwlDetector:
         tensor = (resized - self.mean) / self.std
         return np.ascontiguousarray(tensor.transpose(2, 0, 1)[None], dtype=np.float32), scale
 
+    def text_embeddings(self, texts: Sequence[str]) -> np.ndarray:
+        """``text_embeds`` [1, Q, D] of the queries, computed once per vocabulary (split graph only)."""
+        if self.parts is None:
+            raise ModelError(f"model {self.name!r}: text embeddings are not cached ({self.text_cache_off})")
+        key = tuple(texts)
+        hit = self._text_cache.get(key)
+        if hit is not None:
+            self._text_cache.move_to_end(key)
+            return hit
+        input_ids, attention_mask = self.tokens(texts)
+        (embeds,) = run(self.parts.text, [TEXT_EMBEDS], {"input_ids": input_ids, "attention_mask": attention_mask},
+                        f"model {self.name!r} (text part)")
+        self.text_tower_runs += 1
+        self._text_cache[key] = embeds
+        while len(self._text_cache) > TEXT_CACHE_SIZE:
+            self._text_cache.popitem(last=False)
+        return embeds
+
     def detect(self, image_rgb: np.ndarray, prompts: Sequence[Prompt]) -> list[Detection]:
         """Detections of ``prompts`` (text, class name), best first."""
         image = check_image(image_rgb, self.name)
@@ -202,14 +246,18 @@ class OwlDetector:
             self.last_timings = {"detect": 0.0}
             return []
         t0 = time.perf_counter()
-        input_ids, attention_mask = self.tokens([t for t, _ in pairs])
+        texts = [t for t, _ in pairs]
+        input_ids, attention_mask = self.tokens(texts)
         pixel_values, (sx, sy) = self.preprocess(image)
-        logits, boxes = run(
-            self.session,
-            ["logits", "pred_boxes"],
-            {"input_ids": input_ids, "pixel_values": pixel_values, "attention_mask": attention_mask},
-            f"model {self.name!r}",
-        )
+        what = f"model {self.name!r}"
+        if self.parts is None:
+            logits, boxes = run(self.session, ["logits", "pred_boxes"],
+                                {"input_ids": input_ids, "pixel_values": pixel_values, "attention_mask": attention_mask},
+                                what)
+        else:
+            feeds = {"pixel_values": pixel_values, TEXT_EMBEDS: self.text_embeddings(texts), "input_ids": input_ids}
+            logits, boxes = run(self.parts.image, ["logits", "pred_boxes"],
+                                {k: feeds[k] for k in self.parts.image_inputs}, what)
         logits, boxes = np.asarray(logits)[0], np.asarray(boxes, dtype=np.float64)[0]
         if logits.ndim != 2 or logits.shape[1] != len(pairs) or boxes.shape != (logits.shape[0], 4):
             raise ModelError(

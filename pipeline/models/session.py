@@ -112,12 +112,24 @@ def open_session(
         ModelMissingError: The file does not exist.
         ModelError: The file is not a loadable ONNX model, or its signature differs.
     """
-    import onnxruntime as ort
-
     path = Path(path)
     what = f"model {model_name!r} ({path})" if model_name else str(path)
     if not path.is_file():
         raise ModelMissingError(model_name or path.stem, f"no file {path}")
+    session = session_from(str(path), what, threads)
+    if signature is not None:
+        check_signature(actual_signature(session), signature, what)
+    return session
+
+
+def session_from(source: str | bytes, what: str, threads: int | None = None) -> Any:
+    """An ``onnxruntime.InferenceSession`` from a file name or a serialised model (CUDA first, else CPU).
+
+    Raises:
+        ModelError: Bad ``threads``, or onnxruntime cannot load the model.
+    """
+    import onnxruntime as ort
+
     if threads is not None and (not isinstance(threads, int) or threads < 1):
         raise ModelError(f"{what}: threads must be a positive integer, got {threads!r}")
     options = ort.SessionOptions()
@@ -126,12 +138,9 @@ def open_session(
     options.graph_optimization_level = ort.GraphOptimizationLevel.ORT_ENABLE_ALL
     options.log_severity_level = 3  # errors only: some exports carry unused initializers
     try:
-        session = ort.InferenceSession(str(path), sess_options=options, providers=available_providers())
+        return ort.InferenceSession(source, sess_options=options, providers=available_providers())
     except Exception as exc:  # onnxruntime raises its own Fail/InvalidGraph/... types
         raise ModelError(f"{what}: cannot load the ONNX file: {exc}") from exc
-    if signature is not None:
-        check_signature(actual_signature(session), signature, what)
-    return session
 
 
 def run(session: Any, outputs: Sequence[str] | None, feeds: dict[str, Any], what: str) -> list[Any]:
