@@ -222,9 +222,12 @@ def mission_from_cells(cells: np.ndarray, grid: PlanningGrid) -> Mission:
 
     def check_spot(i: int, what: str) -> None:
         st = grid.state_at(cells[i])
+        x, y, _ = ground_pt(i)
         if st is not CellState.FREE:
-            x, y, _ = ground_pt(i)
             raise MissionError(f"{what} spot ({x:.2f}, {y:.2f}) is on {st.name.lower()} ground")
+        above = (int(cells[i, 0]), int(cells[i, 1]), 1)
+        if ws.shape[2] > 1 and grid.state_at(above) is CellState.OCCUPIED:  # e.g. under a shelf board
+            raise MissionError(f"{what} spot ({x:.2f}, {y:.2f}) has an obstacle right above it")
 
     i, n = 0, len(cells)
     if not on_ground[0]:

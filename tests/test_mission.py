@@ -79,3 +79,17 @@ def test_json_round_trip_and_validation(tmp_path: Path) -> None:
 def test_simplify_keeps_turns_and_reversals() -> None:
     p = np.array([[0, 0, 0], [1, 0, 0], [2, 0, 0], [2, 1, 0], [2, 2, 0], [2, 1, 0]], float)
     assert simplify(p).tolist() == [[0, 0, 0], [2, 0, 0], [2, 2, 0], [2, 1, 0]]
+
+
+def test_takeoff_spot_needs_room_above() -> None:
+    """A shelf board 0.3-0.45 m above the floor (no danger margin): the floor under it is free,
+    but the robot cannot take off there."""
+    board = SceneObject("shelf", "shelf", (0.625, 0.875, 0.375), (0.25, 0.15, 0.25))
+    g = build_grid([board], Workspace(resolution=0.25), margin=0.0)
+    assert g.state_at((2, 3, 0)).name == "FREE" and g.state_at((2, 3, 1)).name == "OCCUPIED"
+    with pytest.raises(MissionError, match=r"take-off spot \(0.62, 0.88\) has an obstacle right above it"):
+        mission_from_cells(np.array([[2, 3, 0], [2, 4, 1], [2, 5, 0]]), g)
+    with pytest.raises(MissionError, match=r"landing spot \(0.62, 0.88\) has an obstacle right above it"):
+        mission_from_cells(np.array([[2, 1, 0], [2, 2, 1], [2, 3, 0]]), g)
+    beside = mission_from_cells(np.array([[1, 3, 0], [1, 4, 1], [1, 5, 0]]), g)  # one cell to the side
+    assert beside.kinds() == ["takeoff", "fly", "land"]
