@@ -24,12 +24,16 @@ class _UserError(Exception):
 
 
 def _config(args: argparse.Namespace) -> MapperConfig:
+    paper = bool(args.paper)
     return MapperConfig(
         w_geometric=args.w_geometric,
         w_depth=args.w_depth,
-        placement=args.placement,
+        placement="ray" if paper else args.placement,
         segment=args.segment,
-        fusion=args.fusion,
+        fusion="fixed" if paper else args.fusion,
+        handle_truncation=not (paper or args.no_uncut_sides),
+        fit_depth=not (paper or args.no_depth_fit),
+        yaw_from_depth=False if paper else None,
     )
 
 
@@ -49,6 +53,13 @@ def _add_common(p: argparse.ArgumentParser) -> None:
                         "depth readings that contradict them (default); fixed: the --w-* weights (the paper)")
     g.add_argument("--w-geometric", type=float, default=0.8, help="fusion weight of the size-prior distance (0.8)")
     g.add_argument("--w-depth", type=float, default=0.2, help="fusion weight of the depth-map distance (0.2)")
+    g.add_argument("--no-uncut-sides", action="store_true",
+                   help="use the box height even when the image border cuts the box (the paper)")
+    g.add_argument("--no-depth-fit", action="store_true",
+                   help="do not fit the depth map's scale (and shift) to the known-size objects (the paper)")
+    g.add_argument("--paper", action="store_true",
+                   help="the paper's recipe: --placement ray --fusion fixed --no-uncut-sides --no-depth-fit, "
+                        "objects facing the camera")
     g.add_argument("--segment", choices=("all", "auto", "none"), default="all",
                    help="all: segment every detection (default); auto: only those whose distance needs the mask "
                         "(unknown size, or cut on both axes), skipping the 1-2 s encoder otherwise; none: boxes only")

@@ -11,13 +11,14 @@ Planning never raises for operator mistakes: :class:`PlanResult` carries ``ok`` 
 from __future__ import annotations
 
 import math
+import threading
 import time
 from dataclasses import dataclass, field
 from typing import Any, Sequence
 
 import numpy as np
 
-from .astar import astar
+from .astar import AStarSearcher, min_finite_cost
 from .grid import CellState, CostWeights, PlanningGrid
 from .mission import Mission, mission_from_cells
 
@@ -48,17 +49,39 @@ def path_points(cells: np.ndarray, grid: PlanningGrid) -> np.ndarray:
     return pts
 
 
+def _lowest_cost(cost: np.ndarray) -> float | None:
+    """The grid's smallest finite cost (the A* heuristic's scale), ``None`` when nothing is passable."""
+    try:
+        return min_finite_cost(cost)
+    except ValueError:
+        return None
+
+
 def _fmt(p: Sequence[float]) -> str:
     return "(" + ", ".join(f"{v:.2f}" for v in p) + ")"
 
 
 class Route:
-    """A multi-stop path under construction on one grid."""
+    """A multi-stop path under construction on one grid.
 
-    def __init__(self, grid: PlanningGrid, start: Sequence[float], weights: CostWeights = CostWeights()) -> None:
+    Args:
+        grid: The planning grid.
+        start: Where the robot stands (world [m]).
+        weights: The Aerial-Ground cost weights.
+        no_corner_cutting: Forbid diagonal moves that sweep past an impassable cell (default: the
+            robot never squeezes between two obstacles that touch at a corner, and never climbs
+            diagonally past an obstacle right above its take-off spot).
+    """
+
+    def __init__(self, grid: PlanningGrid, start: Sequence[float], weights: CostWeights = CostWeights(),
+                 no_corner_cutting: bool = True) -> None:
         self._grid = grid
         self._weights = weights
         self._cost = grid.cost(weights)
+        self._min_cost = _lowest_cost(self._cost)
+        self.no_corner_cutting = bool(no_corner_cutting)
+        self._searcher = AStarSearcher()  # buffers reused by every plan on this route, whatever the thread
+        self._search_lock = threading.Lock()
         self.start: Vec3 = (float(start[0]), float(start[1]), float(start[2]))
         self.registered: list[np.ndarray] = []
         self.candidate: PlanResult | None = None
@@ -117,7 +140,9 @@ class Route:
         if g is None:
             return PlanResult(False, why)
         t0 = time.perf_counter()
-        res = astar(self._cost, s, g, resolution=self._grid.workspace.resolution)
+        with self._search_lock:
+            res = self._searcher.search(self._cost, s, g, resolution=self._grid.workspace.resolution,
+                                        min_cost=self._min_cost, no_corner_cutting=self.no_corner_cutting)
         dt = time.perf_counter() - t0
         if not res.found:
             return PlanResult(False, f"no path from {_fmt(start)} to {_fmt(goal)}: the goal is cut off by obstacles",
@@ -172,6 +197,7 @@ class Route:
         if weights is not None:
             self._weights = weights
         self._cost = grid.cost(self._weights)
+        self._min_cost = _lowest_cost(self._cost)
         notes: list[str] = []
         for n, seg in enumerate(self.registered):
             if not np.all(np.isfinite(self._cost[seg[:, 0], seg[:, 1], seg[:, 2]])):

@@ -180,3 +180,25 @@ def test_dev_set_with_the_offline_models(tmp_path: Path) -> None:
     assert s["mean_time_s"]["total"] > 0 and s["mean_time_s"]["detect"] > 0
     report.save(tmp_path / "r.json")
     assert json.loads((tmp_path / "r.json").read_text())["models"]["detector"] == "yolox_nano"
+
+
+def test_cli_mapping_options_reach_the_mapper_config() -> None:
+    """`--paper` switches every step beyond the paper off; the single switches turn off one each."""
+    import pipeline.cli_commands as cc
+
+    parser = argparse.ArgumentParser()
+    cc.add_bench_parser(parser.add_subparsers())
+
+    def config(*flags: str) -> MapperConfig:
+        return cc._config(parser.parse_args(["bench", "data", *flags]))
+
+    full = config()
+    assert (full.placement, full.fusion, full.handle_truncation, full.fit_depth, full.yaw_from_depth) == \
+        ("box_fit", "adaptive", True, True, None)
+    paper = config("--paper")
+    assert (paper.placement, paper.fusion, paper.handle_truncation, paper.fit_depth, paper.yaw_from_depth) == \
+        ("ray", "fixed", False, False, False)
+    assert (paper.w_geometric, paper.w_depth) == (0.8, 0.2)
+    one = config("--no-depth-fit")
+    assert not one.fit_depth and one.handle_truncation and one.placement == "box_fit"
+    assert not config("--no-uncut-sides").handle_truncation

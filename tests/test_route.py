@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from pipeline.scene import SceneObject
-from planner.grid import Workspace, build_grid
+from planner.grid import CellState, Workspace, build_grid
 from planner.route import Route
 
 
@@ -85,3 +85,19 @@ def test_session_dict_round_trip() -> None:
 def test_weights_change_the_choice() -> None:
     r = _route()
     assert np.all(r.propose((4.5, 7.5, 0.0)).cells[:, 2] == 0)  # empty room: walk
+
+
+def test_the_robot_never_squeezes_between_obstacles_touching_at_a_corner() -> None:
+    """Two posts meet at a corner (no danger margin): the diagonal between them is closed."""
+    posts = [SceneObject(f"p{i}", "cardboard_box", (x, y, 1.5), (0.25, 3.0, 0.25))
+             for i, (x, y) in enumerate([(1.125, 1.375), (1.375, 1.125)])]
+    grid = build_grid(posts, Workspace(resolution=0.25), margin=0.0)
+    a, b = (1.125, 1.125, 0.0), (1.375, 1.375, 0.0)  # cells (4, 4) and (5, 5) on the floor
+    squeezing = Route(grid, a, no_corner_cutting=False).plan(a, b)
+    assert squeezing.ok and len(squeezing.cells) == 2  # one diagonal move between the posts
+    safe = Route(grid, a).plan(a, b)
+    assert safe.ok and len(safe.cells) > 2 and safe.cost > squeezing.cost
+    for p, q in zip(safe.cells[:-1], safe.cells[1:]):  # no move sweeps past a post
+        lo, hi = np.minimum(p, q), np.maximum(p, q)
+        box = grid.state[lo[0]:hi[0] + 1, lo[1]:hi[1] + 1, lo[2]:hi[2] + 1]
+        assert not (box == CellState.OCCUPIED).any()
