@@ -5,7 +5,7 @@ Every photo of a dataset folder in the format of ``../shared/bench/dev`` is resi
 median time per stage and in total [s] for the default mapper and for the sequential baseline
 (``MapperConfig(parallel=False)``), and their ratio.
 
-    python bench/pipeline_speed.py [DATASET_DIR] [--models DIR] [--repeats 3] [--segment all|auto|none]
+    .venv/bin/python bench/pipeline_speed.py [DATASET_DIR] [--models DIR] [--repeats 3] [--segment all|auto|none]
 """
 
 from __future__ import annotations
@@ -22,6 +22,7 @@ import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path[:] = [p for p in sys.path if Path(p or ".").resolve() != Path(__file__).resolve().parent]
+sys.path.insert(0, str(ROOT))  # the repository's packages, also without an installed checkout
 
 from pipeline.catalog import default_catalog  # noqa: E402
 from pipeline.geometry import CameraMount, Intrinsics, Pose  # noqa: E402

@@ -525,11 +525,11 @@ class MissionManager:
         try:
             self._emit("warning", f"FAILSAFE: no heartbeat from the robot for {age:.1f} s: holding",
                        status=MissionStatus.FAILSAFE)
+            deadline = time.monotonic() + self.failsafe_hold  # counted from the failsafe, not the hold's ACK
             try:
                 self.link.hold()
             except LinkError as exc:
                 self._emit("error", f"failsafe hold not delivered: {exc}")
-            deadline = time.monotonic() + self.failsafe_hold
             while time.monotonic() < deadline:
                 st = self.link.latest_state()
                 if st is not None and st.link_ok and st.link_age <= self.failsafe_after:
