@@ -32,7 +32,7 @@ from .mapping_job import MappingJob, Perceiver
 from .mission_view import MissionRunner, MissionView
 from .objects_view import ObjectsView
 from .paths_view import PathsView
-from .robot_view import RobotView
+from .robot_view import RobotView, is_alert
 from .scene_watch import FrameError, NotReady, SceneWatcher, objects_to_world
 from .session import JOB, NOTICE, SESSION_FILE, JobStatus, Notice, RobotSnapshot, Session, SessionError
 
@@ -212,14 +212,25 @@ class ConsoleApp:
         link, session = self.link, self.session
         assert session is not None
 
+        seen = [0]  # number of the newest robot message already told
+        seen_lock = threading.Lock()
+
         def on_state(st: Any) -> None:
             if self._stopped.is_set():
                 return  # a late state while shutting down: the views are gone
+            messages = tuple(getattr(st, "messages", ()))
             session.set_robot(RobotSnapshot(
                 pose=st.pose, mode=getattr(st.mode, "value", str(st.mode)), armed=bool(st.armed),
                 battery=st.battery, healthy=bool(st.link_ok),
                 detail="" if st.health in ("", "ok") else str(st.health), stamp=float(st.time),
+                messages=messages,
             ))
+            with seen_lock:  # state arrives from the link's thread and from connect()
+                fresh = [text for number, text in messages if number > seen[0]]
+                seen[0] = max([seen[0]] + [number for number, _ in messages])
+            for text in fresh:
+                if is_alert(text):
+                    session.notify("Robot says", text, "warning")
 
         self._closers.append(link.subscribe(on_state))
 

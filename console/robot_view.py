@@ -64,6 +64,21 @@ def robot_mesh() -> trimesh.Trimesh:
     return trimesh.util.concatenate(parts)
 
 
+MESSAGES_SHOWN = 3
+"""How many of the robot's latest status messages the panel shows."""
+ALERT_SEVERITIES = ("EMERGENCY", "ALERT", "CRITICAL", "ERROR", "WARNING")
+"""Status messages of these severities also pop up as notifications."""
+
+
+def is_alert(message: str) -> bool:
+    """Whether a ``"SEVERITY: text"`` status message is a warning or worse."""
+    return message.split(":", 1)[0].strip().upper() in ALERT_SEVERITIES
+
+
+def _message_color(message: str) -> str:
+    return "#d62728" if is_alert(message) else "#666666"
+
+
 def status_text(r: RobotSnapshot | None, link_name: str) -> str:
     """One status line for the panel (HTML)."""
     if r is None:
@@ -75,9 +90,11 @@ def status_text(r: RobotSnapshot | None, link_name: str) -> str:
     age = time.time() - r.stamp
     stale = f" · <b style='color:#d62728'>{age:.0f} s old</b>" if age > 2.0 else ""
     detail = f"<br>{html.escape(r.detail)}" if r.detail else ""
+    said = "".join(f"<br><span style='color:{_message_color(t)}'>{html.escape(t)}</span>"
+                   for _, t in r.messages[-MESSAGES_SHOWN:])
     return (f"<small>robot <b>{html.escape(link_name)}</b> · {health} · {html.escape(r.mode)} · {armed} · "
             f"{battery}{stale}<br>pose ({x:.2f}, {y:.2f}, {z:.2f}) m, yaw {math.degrees(r.pose.yaw):.0f}°"
-            f"{detail}</small>")
+            f"{detail}{said}</small>")
 
 
 class RobotView:

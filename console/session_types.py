@@ -94,6 +94,7 @@ class RobotSnapshot:
         healthy: Whether the link is alive.
         detail: Free text from the link (e.g. the failing check).
         stamp: Time of the report [s since the epoch].
+        messages: The robot's latest status messages, oldest first, ``(number, "SEVERITY: text")``.
     """
 
     pose: Pose
@@ -103,6 +104,7 @@ class RobotSnapshot:
     healthy: bool = True
     detail: str = ""
     stamp: float = field(default_factory=time.time)
+    messages: tuple[tuple[int, str], ...] = ()
 
 
 @dataclass(frozen=True)

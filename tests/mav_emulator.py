@@ -14,7 +14,9 @@ It implements the behaviours the MAVLink link relies on, the way ArduPilot Copte
 
 Faults for tests: ``heartbeat_enabled = False`` (silence the heartbeat only), ``drop`` (fraction of
 packets lost in each direction), ``deny_modes`` (NACK the next n changes to a mode),
-``ignore_commands`` (never answer these MAV_CMDs). Speeds are fast so tests stay short.
+``ignore_commands`` (never answer these MAV_CMDs), ``prearm_failure`` (refuse arming as ArduPilot
+does when a pre-arm check fails: a STATUSTEXT ``PreArm: ...`` of severity CRITICAL, then
+MAV_RESULT_FAILED); :meth:`say` sends any STATUSTEXT. Speeds are fast so tests stay short.
 """
 
 from __future__ import annotations
@@ -75,6 +77,7 @@ class ArduCopterEmulator:
         self.heartbeat_enabled = True
         self.deny_modes: dict[str, int] = {}
         self.ignore_commands: set[int] = set()
+        self.prearm_failure: str | None = None
         self.record = Record()
         self.lock = threading.RLock()
         # vehicle state (NED)
@@ -121,6 +124,10 @@ class ArduCopterEmulator:
     def _ack(self, command: int, result: int, confirmation: int) -> None:
         self.record.commands.append((command, confirmation, result))
         self._send("command_ack_send", command, result)
+
+    def say(self, text: str, severity: int = mav.MAV_SEVERITY_INFO) -> None:
+        """Send a STATUSTEXT (at most 50 characters, as MAVLink 1 carries)."""
+        self._send("statustext_send", severity, text.encode()[:50])
 
     def _loop(self) -> None:
         last = time.monotonic()
@@ -197,6 +204,9 @@ class ArduCopterEmulator:
         if cmd == mav.MAV_CMD_COMPONENT_ARM_DISARM:
             if m.param1 >= 0.5:
                 if not self.armed and self.mode not in ARMABLE:
+                    return self._ack(cmd, mav.MAV_RESULT_FAILED, conf)
+                if not self.armed and self.prearm_failure:
+                    self.say(f"PreArm: {self.prearm_failure}", mav.MAV_SEVERITY_CRITICAL)
                     return self._ack(cmd, mav.MAV_RESULT_FAILED, conf)
                 self.armed = True
             else:

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import time
 from pathlib import Path
 
 import pytest
@@ -54,3 +55,38 @@ def test_mavlink_options_become_the_links_frame_and_ground_commands() -> None:
     with pytest.raises(SystemExit):
         build_parser().parse_args(["console", "--ned-origin", "1,2"])
     assert math.isfinite(cfg.ned.north_yaw)
+
+
+def test_autopilot_status_messages_reach_the_operator(tmp_path: Path) -> None:
+    """A MAVLink vehicle's STATUSTEXT lines show in the robot panel; warnings and worse pop up once."""
+    from pymavlink import mavutil
+
+    from console.app import ConsoleConfig, wait_until
+    from console.link.mavlink import MavlinkConfig
+    from console.robot_view import status_text
+    from console.session import NOTICE
+    from mav_emulator import ArduCopterEmulator, free_udp_port
+
+    sev = mavutil.mavlink
+    port = free_udp_port()
+    cfg = ConsoleConfig(robot=f"mavlink:udpin:127.0.0.1:{port}", session_dir=tmp_path / "s", port=0, fresh=True,
+                        link_options={"config": MavlinkConfig(heartbeat_timeout=1.0)})
+    app = ConsoleApp(cfg).start()
+    try:
+        session = app.session
+        notices = []
+        session.subscribe(lambda t, p: notices.append(p) if t == NOTICE else None)
+        with ArduCopterEmulator(port) as emu:
+            assert wait_until(lambda: session.robot is not None and session.robot.healthy, 15)
+            emu.say("EKF3 IMU0 is using GPS", sev.MAV_SEVERITY_INFO)
+            emu.say("Crash: Disarming", sev.MAV_SEVERITY_CRITICAL)
+            assert wait_until(lambda: [t for _, t in session.robot.messages][-2:] ==
+                              ["INFO: EKF3 IMU0 is using GPS", "CRITICAL: Crash: Disarming"], 10), session.robot
+            panel = status_text(session.robot, "mavlink")
+            assert "CRITICAL: Crash: Disarming" in panel and "INFO: EKF3 IMU0 is using GPS" in panel
+            assert wait_until(lambda: any(n.body == "CRITICAL: Crash: Disarming" for n in notices), 5), notices
+            time.sleep(0.5)  # more state samples carrying the same messages: no repeated pop-up
+            told = [n.body for n in notices if n.title == "Robot says"]
+            assert told == ["CRITICAL: Crash: Disarming"]
+    finally:
+        app.stop()

@@ -293,3 +293,32 @@ def test_open_link_reaches_a_vehicle_by_spec() -> None:
             link.close()
     finally:
         emu.stop()
+
+
+def test_a_failed_prearm_check_is_reported_with_the_vehicles_reason(vehicle) -> None:
+    """ArduPilot refuses arming with MAV_RESULT_FAILED after a STATUSTEXT naming the failed check:
+    the operator gets both, and the message also reaches the state stream."""
+    link, emu = vehicle
+    emu.prearm_failure = "Need 3D Fix"
+    manager = MissionManager(link, failsafe_after=1.5, failsafe_hold=0.5)
+    manager.start(Mission((MissionSegment(TAKEOFF, ((2.5, 0.7, 0.0), (2.5, 0.7, 1.5))),)))
+    assert manager.wait(20.0) is MissionStatus.PAUSED
+    message = manager.progress().message
+    assert "arming rejected by the vehicle: MAV_RESULT_FAILED (vehicle says: CRITICAL: PreArm: Need 3D Fix)" \
+        in message, message
+    assert _eventually(lambda: [t for _, t in link.latest_state().messages] == ["CRITICAL: PreArm: Need 3D Fix"])
+    emu.prearm_failure = None  # the fix came: resume arms and takes off
+    emu.say("EKF3 IMU0 is using GPS")
+    manager.resume()
+    assert manager.wait(30.0) is MissionStatus.DONE, _events(manager)
+    assert _eventually(lambda: link.latest_state().messages[-1] == (2, "INFO: EKF3 IMU0 is using GPS"))
+    assert [n for n, _ in link.latest_state().messages] == [1, 2]
+
+
+def _eventually(check, timeout: float = 2.0) -> bool:
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        if check():
+            return True
+        time.sleep(0.02)
+    return check()

@@ -95,6 +95,9 @@ def test_walking_into_an_occupied_cell_is_refused() -> None:
     # a target inside an object is refused before moving
     run = robot.run_segment(MissionSegment(WALK, ((2.55, y, 0.0), (2.5, BOX_LINE_Y, 0.0))))
     assert run.status is RunStatus.FAILED and "occupies" in run.error
+    robot.run_for(0.1)
+    said = [t for _, t in robot.latest_state().messages]  # the robot tells the operator, as an autopilot would
+    assert said[-2].startswith("ERROR: ") and "walking stopped" in said[-2] and "occupies" in said[-1]
 
 
 def test_takeoff_flight_and_landing_take_time_and_report_modes() -> None:
@@ -187,6 +190,9 @@ def test_link_outage_freezes_the_stream_then_the_robot_holds_and_lands_by_itself
     robot.run_for(7.5)  # outage over; the robot landed where it held
     st = robot.latest_state()
     assert st.link_ok and st.landed and st.position[1] == pytest.approx(0.7 + 1.0 * 1.5, abs=0.05)
+    said = [t for _, t in st.messages]
+    assert said[-2].startswith("WARNING: ") and "link lost" in said[-2]
+    assert said[-1] == "CRITICAL: link lost for 3 s: landing by itself"
 
 
 # --- camera --------------------------------------------------------------------------------------

@@ -76,6 +76,9 @@ class RobotState:
         link_age: Time since the robot was last heard from [s] (0 for the simulator).
         health: Short text for the operator (``ok``, ``no heartbeat for 2.1 s`` ...).
         autopilot_mode: The flight controller's mode name (``GUIDED``, ``LAND`` ...), or ``""``.
+        messages: The robot's latest status messages, oldest first, as ``(number, text)``; ``number``
+            counts every message since the link opened (so a listener can tell new ones) and
+            ``text`` starts with the severity (MAVLink STATUSTEXT: ``"WARNING: PreArm: Need 3D Fix"``).
     """
 
     time: float
@@ -91,6 +94,7 @@ class RobotState:
     link_age: float = 0.0
     health: str = "ok"
     autopilot_mode: str = ""
+    messages: tuple[tuple[int, str], ...] = ()
 
     @property
     def pose(self) -> Pose:

@@ -63,6 +63,13 @@ VELOCITY_ONLY_MASK = 0b0000_1001_1100_0111
 LANDED_UNDEFINED, LANDED_ON_GROUND, LANDED_IN_AIR, LANDED_TAKEOFF, LANDED_LANDING = 0, 1, 2, 3, 4
 """MAV_LANDED_STATE values (EXTENDED_SYS_STATE.landed_state)."""
 
+STATUSTEXT_KEPT = 10
+"""How many of the vehicle's latest STATUSTEXT messages the link keeps."""
+STATUSTEXT_IN_STATE = 5
+"""How many of them each state sample carries."""
+STATUSTEXT_LEAD = 0.5
+"""A refusal is explained by the STATUSTEXT lines from this long [s] before the command on."""
+
 _URL_RE = re.compile(r"^(udpin|udpout|udp|udpbcast|tcp|tcpin):([^:]+):(\d+)$")
 
 
@@ -75,6 +82,14 @@ def _mavutil() -> Any:
 def copter_modes() -> dict[str, int]:
     """ArduPilot Copter mode names -> custom mode numbers (``GUIDED`` -> 4, ``LAND`` -> 9 ...)."""
     return {name: num for num, name in _mavutil().mode_mapping_acm.items()}
+
+
+def statustext_line(msg: Any) -> str:
+    """``"SEVERITY: text"`` of a STATUSTEXT message (``"WARNING: PreArm: Need 3D Fix"``)."""
+    sev = _mavutil().mavlink.enums["MAV_SEVERITY"].get(int(msg.severity))
+    name = sev.name.removeprefix("MAV_SEVERITY_") if sev is not None else f"SEVERITY {int(msg.severity)}"
+    text = msg.text.decode(errors="replace") if isinstance(msg.text, bytes) else str(msg.text)
+    return f"{name}: {text.rstrip(chr(0)).strip()}"
 
 
 def parse_connection(url: str) -> tuple[str, int | None]:
@@ -232,7 +247,8 @@ class _Vehicle:
     landed_state: int = LANDED_UNDEFINED
     battery: float | None = None
     voltage: float | None = None
-    statustext: list[str] = field(default_factory=list)
+    statustext: list[tuple[int, float, str]] = field(default_factory=list)  # (number, monotonic [s], text)
+    statustext_count: int = 0
 
     @property
     def armed(self) -> bool:
@@ -445,7 +461,9 @@ class MavlinkLink(RobotLink):
             elif kind == "COMMAND_ACK":
                 self._acks[int(msg.command)] = msg
             elif kind == "STATUSTEXT":
-                v.statustext = (v.statustext + [str(msg.text)])[-10:]
+                v.statustext_count += 1
+                entry = (v.statustext_count, time.monotonic(), statustext_line(msg))
+                v.statustext = (v.statustext + [entry])[-STATUSTEXT_KEPT:]
             self._vlock.notify_all()
 
     # --- state -----------------------------------------------------------------------------------
@@ -483,6 +501,7 @@ class MavlinkLink(RobotLink):
             mode_name = self._mode_names.get(v.custom_mode, f"mode {v.custom_mode}") if v.custom_mode is not None else ""
             status, armed = v.system_status, v.armed
             battery, voltage, landed_state, has_pos = v.battery, v.voltage, v.landed_state, v.pos_ned is not None
+            messages = tuple((n, text) for n, _, text in v.statustext[-STATUSTEXT_IN_STATE:])
         run = self._run
         if run is not None and not run.done:
             mode = {SegmentKind.WALK: Mode.WALKING, SegmentKind.TAKEOFF: Mode.TAKING_OFF,
@@ -506,7 +525,8 @@ class MavlinkLink(RobotLink):
             health = "ok"
         return RobotState(time=time.time(), position=pos, yaw=yaw, velocity=vel, mode=mode, armed=armed,
                           landed=landed, battery=battery, battery_voltage=voltage, link_ok=link_ok,
-                          link_age=age if math.isfinite(age) else 1e9, health=health, autopilot_mode=mode_name)
+                          link_age=age if math.isfinite(age) else 1e9, health=health, autopilot_mode=mode_name,
+                          messages=messages)
 
     # --- commands --------------------------------------------------------------------------------
     def command(self, command: int, params: tuple[float, ...], what: str,
@@ -533,6 +553,7 @@ class MavlinkLink(RobotLink):
             comp = component
         p = list(params) + [0.0] * (7 - len(params))
         attempts = self.config.retries + 1
+        sent_at = time.monotonic()
         for attempt in range(attempts):
             if cancel is not None and cancel.is_set():
                 raise _Stopped()
@@ -566,11 +587,19 @@ class MavlinkLink(RobotLink):
                 return  # the refusal answers a re-send of a command that had already worked
             self.stats["nacks"] += 1
             result = mav.enums["MAV_RESULT"][ack.result].name if ack.result in mav.enums["MAV_RESULT"] else str(ack.result)
-            raise CommandRejected(f"{what} rejected by the vehicle: {result}")
+            said = self._statustext_since(sent_at - STATUSTEXT_LEAD)
+            raise CommandRejected(f"{what} rejected by the vehicle: {result}"
+                                  + (f" (vehicle says: {'; '.join(said)})" if said else ""))
         if cancel is not None and cancel.is_set():
             raise _Stopped()
         raise LinkTimeout(f"{what}: no COMMAND_ACK from the vehicle after {attempts} attempt(s) "
                           f"({self.config.ack_timeout:.1f} s each)")
+
+    def _statustext_since(self, t: float) -> list[str]:
+        """The vehicle's STATUSTEXT lines received since monotonic time ``t`` (a refusal's reasons:
+        ArduPilot sends e.g. ``PreArm: Need 3D Fix`` with a refused arming)."""
+        with self._vlock:
+            return [text for _, when, text in self._v.statustext if when >= t]
 
     def vehicle_mode(self) -> str | None:
         """The autopilot's current mode name, from its heartbeat."""

@@ -46,6 +46,7 @@ DEFAULT_INTRINSICS = Intrinsics(525.0, 525.0, 319.5, 239.5, 640, 480)
 DEFAULT_MOUNT = CameraMount(position=(0.15, 0.0, 0.35), pitch=0.0)
 """Camera on the simulated robot (robot body frame), looking straight ahead."""
 
+MESSAGES_KEPT = 5  # status messages carried by each state sample
 _STEP = 0.05  # [m] longest straight move checked against the occupancy at once
 
 
@@ -170,6 +171,8 @@ class SimRobot(RobotLink):
         self._link_lost_at = 0.0
         self._self_landing = False
         self._frozen: RobotState | None = None
+        self._messages: list[tuple[int, str]] = []  # (number, "SEVERITY: text"), newest last
+        self._n_messages = 0
         self._lock = threading.RLock()
         self._render_lock = threading.Lock()
         self._renderer: SceneRenderer | None = None
@@ -298,6 +301,7 @@ class SimRobot(RobotLink):
                     and not self._self_landing:
                 self._self_landing = True  # once per outage (a blocked descent is not retried)
                 log.info("simulated robot: link lost for %.1f s, landing by itself", outage)
+                self._say("CRITICAL", f"link lost for {outage:.0f} s: landing by itself")
                 self._phases = [_Phase("descend", Mode.LANDING, target=(float(self._pos[0]), float(self._pos[1]),
                                                                         self._floor), speed=self.config.descent_rate),
                                 _Phase("settle", Mode.LANDING, duration=self.config.settle_time)]
@@ -329,7 +333,12 @@ class SimRobot(RobotLink):
             time=now, position=(float(p[0]), float(p[1]), float(p[2])), yaw=float(self._yaw),
             velocity=(float(v[0]), float(v[1]), float(v[2])), mode=self._mode(), armed=self._armed,
             landed=self._landed, battery=self._battery, link_ok=True, link_age=0.0, health="ok",
-            autopilot_mode="SIM")
+            autopilot_mode="SIM", messages=tuple(self._messages))
+
+    def _say(self, severity: str, text: str) -> None:
+        """Add a status message (as an autopilot's STATUSTEXT) to the state stream."""
+        self._n_messages += 1
+        self._messages = (self._messages + [(self._n_messages, f"{severity}: {text}")])[-MESSAGES_KEPT:]
 
     # --- motion ----------------------------------------------------------------------------------
     def _blocker(self, p: np.ndarray) -> str | None:
@@ -420,6 +429,7 @@ class SimRobot(RobotLink):
             self._run.finish(status, error)
             if error:
                 log.info("segment %s: %s", status.value, error)
+                self._say("ERROR" if status is RunStatus.FAILED else "WARNING", error)
         self._run = None
         self._phases = []
 
@@ -437,6 +447,7 @@ class SimRobot(RobotLink):
                 phases = self._plan(segment)
             except LinkError as exc:
                 run.finish(RunStatus.FAILED, str(exc))
+                self._say("ERROR", f"{segment.kind.value} refused: {exc}")
                 return run
             self._run = run
             self._phases = phases
