@@ -187,6 +187,39 @@ def test_link_loss_runs_the_failsafe_and_the_mission_survives() -> None:
         robot.close()
 
 
+class _SlowHold(SimRobot):
+    """A robot whose hold command takes long to confirm (a MAVLink BRAKE waiting out its ACK retries)."""
+
+    def hold(self) -> None:
+        time.sleep(0.8)
+        super().hold()
+
+
+def test_a_link_back_during_a_slow_hold_pauses_instead_of_landing() -> None:
+    robot = _SlowHold(config=SimConfig(time_scale=1.0, **{**FAST, "fly_speed": 0.3, "link_loss_land": 30.0}))
+    robot.connect()
+    hop = Mission((
+        MissionSegment(TAKEOFF, ((2.5, 0.7, 0.0), (2.5, 0.7, 1.5))),
+        MissionSegment(FLY, ((2.5, 0.7, 1.5), (2.5, 2.2, 1.5))),
+    ))
+    try:
+        manager = MissionManager(robot, failsafe_after=0.3, failsafe_hold=0.3)
+        manager.start(hop)
+        while manager.progress().kind is not FLY:
+            time.sleep(0.005)
+        robot.drop_link(0.5)  # back before the hold returns, after failsafe_hold has run out
+        assert manager.wait(5.0, until=[MissionStatus.PAUSED]) is MissionStatus.PAUSED, \
+            [e.message for e in manager.events]
+        msgs = [e.message for e in manager.events]
+        assert any(m.startswith("FAILSAFE: no heartbeat") for m in msgs)
+        assert any(m.startswith("link restored during the failsafe hold") for m in msgs)
+        assert not any("landing" in m for m in msgs)
+        time.sleep(0.3)
+        assert not robot.latest_state().landed
+    finally:
+        robot.close()
+
+
 def test_manager_rejects_nonsense_settings(robot: SimRobot) -> None:
     with pytest.raises(ValueError, match="failsafe_after"):
         MissionManager(robot, failsafe_after=0)

@@ -154,6 +154,7 @@ def test_hold_stops_in_the_air_and_tells_where_to_continue() -> None:
     st = robot.latest_state()
     assert st.position == pytest.approx(here) and st.mode is Mode.HOLDING and not st.landed
     assert 0.3 < run.progress < 0.7
+    assert st.messages == ()  # the operator's own hold is not echoed back as a robot message
 
 
 def test_state_stream_runs_at_least_20_hz_in_real_time() -> None:

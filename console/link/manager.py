@@ -530,12 +530,14 @@ class MissionManager:
                 self.link.hold()
             except LinkError as exc:
                 self._emit("error", f"failsafe hold not delivered: {exc}")
-            while time.monotonic() < deadline:
+            while True:  # checked at least once after the hold, even when its retries outlasted the deadline
                 st = self.link.latest_state()
                 if st is not None and st.link_ok and st.link_age <= self.failsafe_after:
                     self._emit("warning", "link restored during the failsafe hold: mission paused "
                                           "(resume or abort)", status=MissionStatus.PAUSED)
                     return
+                if time.monotonic() >= deadline:
+                    break
                 time.sleep(self.poll)
             st = self.link.latest_state()
             if st is None or st.landed:

@@ -424,12 +424,13 @@ class SimRobot(RobotLink):
     def _progress(self) -> float:
         return self._progress_done / self._progress_total if self._progress_total > 0 else 0.0
 
-    def _finish(self, status: RunStatus, error: str | None = None) -> None:
+    def _finish(self, status: RunStatus, error: str | None = None, say: bool = True) -> None:
         if self._run is not None:
             self._run.finish(status, error)
             if error:
                 log.info("segment %s: %s", status.value, error)
-                self._say("ERROR" if status is RunStatus.FAILED else "WARNING", error)
+                if say:  # the robot's own reasons (not the operator's hold / abort)
+                    self._say("ERROR" if status is RunStatus.FAILED else "WARNING", error)
         self._run = None
         self._phases = []
 
@@ -531,7 +532,7 @@ class SimRobot(RobotLink):
     def hold(self) -> None:
         self._require_link()
         with self._lock:
-            self._stop_motion(RunStatus.HELD, "held by the operator")
+            self._stop_motion(RunStatus.HELD, "held by the operator", say=False)
             self._vel = np.zeros(3)
             state = self._state()
         self._stream.publish(state)  # the stream shows the stop at once, not a tick later
@@ -539,17 +540,17 @@ class SimRobot(RobotLink):
     def abort(self) -> None:
         self._require_link()
         with self._lock:
-            self._stop_motion(RunStatus.ABORTED, "aborted by the operator")
+            self._stop_motion(RunStatus.ABORTED, "aborted by the operator", say=False)
             self._vel = np.zeros(3)
             state = self._state()
         self._stream.publish(state)
 
-    def _stop_motion(self, status: RunStatus, why: str) -> None:
+    def _stop_motion(self, status: RunStatus, why: str, say: bool = True) -> None:
         if self._phases and self._phases[0].kind == "spool":
             self._armed = False  # never lifted off
         if self._landed and self._phases and self._phases[0].kind == "settle":
             self._armed = False
-        self._finish(status, why)
+        self._finish(status, why, say)
 
     # --- camera ----------------------------------------------------------------------------------
     def capture(self) -> CaptureResult:
