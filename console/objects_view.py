@@ -16,6 +16,7 @@ import html
 import logging
 import math
 import threading
+from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 from typing import Any, Callable, Sequence
 
@@ -28,6 +29,8 @@ from .session import SCENE, SELECTION, Session, SessionError
 log = logging.getLogger(__name__)
 
 NONE_CHOICE = "(none)"
+DROP_TOLERANCE_M = 1e-3  # a gizmo released closer than this to where it was grabbed did not move [m]
+DROP_TOLERANCE_RAD = 1e-3  # ... nor turn [rad]
 Vec3 = tuple[float, float, float]
 
 
@@ -205,6 +208,7 @@ class ObjectsView:
         delete.on_click(self._on_delete)
         close.on_click(lambda _e: self._session.select(None))
         self._selection_box: Any = None
+        self._drops = ThreadPoolExecutor(max_workers=1, thread_name_prefix="gizmo-drop")
         self._gizmo: Any = None
         self._gizmo_for: tuple[str, Vec3, float] | None = None  # (id, centre, yaw) the gizmo was placed at
         session.subscribe(self._on_event)
@@ -322,13 +326,16 @@ class ObjectsView:
         oid = obj.id
 
         async def dragged(event: Any) -> None:
-            # async keeps the phases in order; the move itself (grid rebuild) runs off the event loop
+            # async keeps the phases in order; the move itself (grid rebuild) runs off the event loop,
+            # one drop after the other in the order they were made
+            if event.target is not self._gizmo:
+                return  # a late event of a gizmo already replaced
             pose = (tuple(float(v) for v in event.target.position), wxyz_yaw(event.target.wxyz))
-            if event.phase == "update" and self._selection_box is not None:
-                self._selection_box.position, self._selection_box.wxyz = pose[0], yaw_wxyz(pose[1])
+            box = self._selection_box
+            if event.phase == "update" and box is not None:
+                box.position, box.wxyz = pose[0], yaw_wxyz(pose[1])
             elif event.phase == "end":
-                threading.Thread(target=self._drop_and_tell, args=(oid, pose[0][:2], pose[1], event.client),
-                                 daemon=True).start()
+                self._drops.submit(self._drop_and_tell, oid, pose[0][:2], pose[1], event.client)
 
         self._gizmo.on_update(dragged)
 
@@ -338,18 +345,24 @@ class ObjectsView:
             g = self._gizmo
             return None if g is None else (tuple(float(v) for v in g.position), wxyz_yaw(g.wxyz))  # type: ignore[return-value]
 
-    def drop(self, object_id: str, xy: Sequence[float], yaw: float) -> list[str]:
+    def drop(self, object_id: str, xy: Sequence[float], yaw: float) -> list[str] | None:
         """Finish a gizmo drag: the object keeps its height and takes the new ``xy`` [m] and ``yaw`` [rad].
+
+        Returns the move's notes, or ``None`` when the pose did not change (a click on the gizmo:
+        nothing is rebuilt, the route and mission stay).
 
         Raises:
             SessionError: The object is gone or the place is refused; the gizmo goes back to the object.
         """
         try:
             try:
-                z = self._session.scene.object(object_id).position[2]
+                obj = self._session.scene.object(object_id)
             except KeyError:
                 raise SessionError(f"no object {object_id!r} in the map (was it deleted in another tab?)") from None
-            return self._session.move_object(object_id, (float(xy[0]), float(xy[1]), z), yaw)
+            turn = math.remainder(float(yaw) - obj.yaw, math.tau)
+            if math.dist(obj.position[:2], xy[:2]) < DROP_TOLERANCE_M and abs(turn) < DROP_TOLERANCE_RAD:
+                return None
+            return self._session.move_object(object_id, (float(xy[0]), float(xy[1]), obj.position[2]), yaw)
         except SessionError:
             with self._lock:
                 self._gizmo_for = None  # re-place it where the object still is
@@ -363,7 +376,7 @@ class ObjectsView:
             if client is not None:
                 client.add_notification("Cannot move", str(exc), color="red", auto_close_seconds=6.0)
             return
-        if client is not None:
+        if notes is not None and client is not None:
             client.add_notification("Moved", "; ".join(notes) or "grid rebuilt", color="blue", auto_close_seconds=6.0)
 
     # --- operator actions -----------------------------------------------------------------------

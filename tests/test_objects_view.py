@@ -83,3 +83,19 @@ def test_a_refused_drop_keeps_the_object_and_puts_the_gizmo_back(server: viser.V
     with pytest.raises(SessionError, match="no object 'desk'"):
         view.drop("desk", (1.0, 1.0), 0.0)
     assert view.drawn_ids() == ["crate"]
+
+
+def test_a_click_on_the_gizmo_moves_nothing_and_keeps_the_mission(server: viser.ViserServer,
+                                                                   session: Session) -> None:
+    view = ObjectsView(server, session)
+    session.add_goal((2.5, 2.0, 0.0))
+    session.register()
+    mission = session.build_mission()
+    session.select("desk")
+    grid = session.grid
+    assert view.drop("desk", (3.5 + 2e-4, 6.0), 0.3 + 2e-4) is None  # released where it was grabbed
+    assert session.mission is mission and session.grid is grid
+    assert session.scene.object("desk").position == pytest.approx((3.5, 6.0, 0.375))
+    assert view.drop("desk", (3.5, 6.0), 0.3 + 2 * math.pi) is None  # a full turn is no turn
+    assert view.drop("desk", (3.6, 6.0), 0.3) is not None  # 10 cm is a move
+    assert session.grid is not grid
