@@ -7,7 +7,8 @@ post-processing without any downloaded weights:
   of each patch; ``logits = 2 * dot - 4`` (-1e6 for padded queries, as the real class head masks
   queries whose first token is 0); ``pred_boxes`` = the patch cells. As in the real export, the
   class head reads the ``text_embeds`` output (or, with ``head_reads_embeds=False``, a tensor
-  upstream of it, so the graph cannot be cut at the text embeddings).
+  upstream of it, so the graph cannot be cut at the text embeddings); with ``batch_from_image``
+  ``text_embeds`` is reshaped with the batch size read from the image side, as in the real export.
 - SAM: the encoder average-pools the image; the decoder's mask logit is the signed distance to
   the prompt box, computed in the ORIGINAL frame from ``orig_im_size`` and the resized-frame box,
   and is negative everywhere unless the point labels are (2, 3, -1).
@@ -79,7 +80,7 @@ def write_tokenizer(path: Path, vocab: dict[str, int] | None = None) -> Path:
 
 
 def owl_model(path: Path, image_size: int = 32, patch: int = 8, vocab: dict[str, int] | None = None,
-              head_reads_embeds: bool = True) -> Path:
+              head_reads_embeds: bool = True, batch_from_image: bool = False) -> Path:
     """OWL export signature: (input_ids, pixel_values, attention_mask) -> (logits, pred_boxes,
     text_embeds, image_embeds); colour words match patches of that colour."""
     vocab = vocab or owl_vocab()
@@ -95,11 +96,17 @@ def owl_model(path: Path, image_size: int = 32, patch: int = 8, vocab: dict[str,
         helper.make_node("Unsqueeze", ["mask_f", "ax2"], ["mask_3"]),
         helper.make_node("Mul", ["tok_emb", "mask_3"], ["tok_masked"]),
         helper.make_node("ReduceSum", ["tok_masked", "ax1"], ["text_vec"], keepdims=0),  # [Q, 3]
-        helper.make_node("Unsqueeze", ["text_vec", "ax0"], ["text_embeds"]),
         helper.make_node(
             "AveragePool", ["pixel_values"], ["pooled"], kernel_shape=[patch, patch], strides=[patch, patch]
         ),
         helper.make_node("Transpose", ["pooled"], ["image_embeds"], perm=[0, 2, 3, 1]),  # [1, g, g, 3]
+        *([  # as the real export: text_embeds = reshape(q, (batch of the image, -1, D))
+            helper.make_node("Shape", ["image_embeds"], ["img_shape"]),
+            helper.make_node("Gather", ["img_shape", "zero"], ["batch"], axis=0),
+            helper.make_node("Unsqueeze", ["batch", "ax0"], ["batch_1"]),
+            helper.make_node("Concat", ["batch_1", "minus_one", "dim3"], ["embeds_shape"], axis=0),
+            helper.make_node("Reshape", ["text_vec", "embeds_shape"], ["text_embeds"]),
+        ] if batch_from_image else [helper.make_node("Unsqueeze", ["text_vec", "ax0"], ["text_embeds"])]),
         helper.make_node("Reshape", ["image_embeds", "patch_shape"], ["patches"]),  # [1, P, 3]
         (helper.make_node("Transpose", ["text_embeds"], ["text_t"], perm=[0, 2, 1]) if head_reads_embeds  # [1, 3, Q]
          else helper.make_node("Transpose", ["text_vec"], ["text_t"], perm=[1, 0])),  # [3, Q]
@@ -120,6 +127,8 @@ def owl_model(path: Path, image_size: int = 32, patch: int = 8, vocab: dict[str,
         _const("two", np.float32(2.0)),
         _const("four", np.float32(4.0)),
         _const("zero", np.int64(0)),
+        _const("minus_one", np.array([-1], np.int64)),
+        _const("dim3", np.array([3], np.int64)),
         _const("masked", np.float32(-1e6)),
         _const("boxes_const", boxes),
     ]

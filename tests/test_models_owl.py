@@ -149,6 +149,22 @@ def test_text_tower_runs_once_per_vocabulary_and_matches_the_whole_graph(tmp_pat
     assert cached.text_tower_runs == 2  # still cached
 
 
+def test_the_cut_passes_below_a_reshape_that_reads_the_image_batch(tmp_path: Path) -> None:
+    """In the real exports text_embeds = reshape(normalised text embeddings, (image batch, -1, D)):
+    the text part must not need the image, so the cut moves to the reshape's input."""
+    d = _model_dir(tmp_path)
+    owl_model(d / "model.onnx", image_size=32, patch=8, batch_from_image=True)
+    cached = OwlDetector.from_dir(d, variant="owlv2", score_threshold=0.5)
+    assert cached.parts is not None, cached.text_cache_off
+    assert cached.parts.text_output == "text_vec"
+    assert [i.name for i in cached.parts.text.get_inputs()] == ["input_ids", "attention_mask"]
+    assert set(cached.parts.image_inputs) == {"pixel_values", "text_vec", "input_ids"}
+    whole = OwlDetector.from_dir(d, variant="owlv2", score_threshold=0.5, cache_text=False)
+    assert _detections(cached.detect(_image(), PROMPTS)) == _detections(whole.detect(_image(), PROMPTS))
+    assert {x.label for x in cached.detect(_image(), PROMPTS)} == {"red_thing", "green_thing"}
+    assert cached.text_tower_runs == 1
+
+
 def test_padded_queries_are_masked_in_the_image_part(tmp_path: Path) -> None:
     """The image part still reads input_ids: a query whose first token is padding never scores."""
     det = OwlDetector.from_dir(_model_dir(tmp_path), variant="owlv2", score_threshold=0.5)

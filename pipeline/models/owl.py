@@ -35,7 +35,7 @@ import numpy as np
 from pipeline.models.base import Detection, ModelError, Prompt, check_image, check_prompts
 from pipeline.models.hub_config import parse_size, parse_triplet, read_json
 from pipeline.models.nms import batched_nms
-from pipeline.models.owl_split import TEXT_EMBEDS, OwlParts, SplitError, split_owl
+from pipeline.models.owl_split import OwlParts, SplitError, split_owl
 from pipeline.models.session import IOSignature, TensorSpec, open_session, run
 
 log = logging.getLogger(__name__)
@@ -221,7 +221,8 @@ class OwlDetector:
         return np.ascontiguousarray(tensor.transpose(2, 0, 1)[None], dtype=np.float32), scale
 
     def text_embeddings(self, texts: Sequence[str]) -> np.ndarray:
-        """``text_embeds`` [1, Q, D] of the queries, computed once per vocabulary (split graph only)."""
+        """The queries' text embeddings (the tensor the graph was cut at: ``text_embeds`` [1, Q, D] or
+        the normalised [Q, D] it is reshaped from), computed once per vocabulary (split graph only)."""
         if self.parts is None:
             raise ModelError(f"model {self.name!r}: text embeddings are not cached ({self.text_cache_off})")
         key = tuple(texts)
@@ -230,8 +231,8 @@ class OwlDetector:
             self._text_cache.move_to_end(key)
             return hit
         input_ids, attention_mask = self.tokens(texts)
-        (embeds,) = run(self.parts.text, [TEXT_EMBEDS], {"input_ids": input_ids, "attention_mask": attention_mask},
-                        f"model {self.name!r} (text part)")
+        (embeds,) = run(self.parts.text, [self.parts.text_output],
+                        {"input_ids": input_ids, "attention_mask": attention_mask}, f"model {self.name!r} (text part)")
         self.text_tower_runs += 1
         self._text_cache[key] = embeds
         while len(self._text_cache) > TEXT_CACHE_SIZE:
@@ -255,7 +256,8 @@ class OwlDetector:
                                 {"input_ids": input_ids, "pixel_values": pixel_values, "attention_mask": attention_mask},
                                 what)
         else:
-            feeds = {"pixel_values": pixel_values, TEXT_EMBEDS: self.text_embeddings(texts), "input_ids": input_ids}
+            feeds = {"pixel_values": pixel_values, self.parts.text_output: self.text_embeddings(texts),
+                     "input_ids": input_ids}
             logits, boxes = run(self.parts.image, ["logits", "pred_boxes"],
                                 {k: feeds[k] for k in self.parts.image_inputs}, what)
         logits, boxes = np.asarray(logits)[0], np.asarray(boxes, dtype=np.float64)[0]

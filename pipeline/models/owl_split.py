@@ -2,15 +2,19 @@
 
 The Hugging Face exports of OWL-ViT / OWLv2 are one graph that runs the CLIP text tower on every
 image. In the model, the class head reads the query embeddings that the graph also outputs as
-``text_embeds`` [1, Q, D] (plus ``input_ids`` for the mask of padded queries). Cutting the graph
-at that tensor gives two graphs:
+``text_embeds`` [1, Q, D] (plus ``input_ids`` for the mask of padded queries). That tensor is a
+reshape of the normalised text embeddings [Q, D] whose target shape takes the batch size from the
+image side (``Shape(image_embeds)``), so the cut is made below such shape-only nodes (Reshape,
+Unsqueeze, Squeeze, Flatten, Identity), at the first tensor that depends on the text inputs only:
 
-- text: ``(input_ids, attention_mask) -> text_embeds``, run once per vocabulary;
-- image: ``(pixel_values, text_embeds[, input_ids]) -> (logits, pred_boxes)``, run per photo.
+- text: ``(input_ids, attention_mask) -> cut tensor``, run once per vocabulary;
+- image: ``(pixel_values, cut tensor[, input_ids]) -> (logits, pred_boxes)``, run per photo (it
+  redoes the cheap reshape).
 
-The cut is refused (the caller then runs the whole graph) when the file has no ``text_embeds``
-tensor or when the image part would still read ``attention_mask`` (its class head would then
-depend on the text tower through another path).
+The cut is refused (:class:`SplitError`; the caller then runs the whole graph) when the file has
+no ``text_embeds`` tensor, when no such tensor is found below it, when the image part would still
+read ``attention_mask`` (its class head would depend on the text tower through another path), or
+when onnxruntime cannot load a part.
 """
 
 from __future__ import annotations
@@ -36,16 +40,18 @@ class OwlParts:
     """The two sessions of a split OWL export.
 
     Attributes:
-        text: ``(input_ids, attention_mask) -> text_embeds``.
-        image: ``(pixel_values, text_embeds[, input_ids]) -> (logits, pred_boxes)``.
+        text: ``(input_ids, attention_mask) -> text_output``.
+        image: ``(pixel_values, text_output[, input_ids]) -> (logits, pred_boxes)``.
         image_inputs: The image part's input names.
         signature: The whole export's I/O (as read from the file).
+        text_output: The tensor the graph was cut at (``text_embeds`` or the tensor it is reshaped from).
     """
 
     text: Any
     image: Any
     image_inputs: tuple[str, ...]
     signature: IOSignature
+    text_output: str = TEXT_EMBEDS
 
 
 def _signature(graph: Any) -> IOSignature:
@@ -58,10 +64,15 @@ def _signature(graph: Any) -> IOSignature:
                        tuple(spec(v) for v in graph.output))
 
 
+SHAPE_ONLY_OPS = frozenset({"Reshape", "Unsqueeze", "Squeeze", "Flatten", "Identity"})
+"""Ops the cut may pass below: they only rearrange their first input (other inputs give shapes)."""
+
+
 def _graph_inputs_read(graph: Any, outputs: tuple[str, ...], stop: set[str]) -> set[str]:
-    """Which of the graph's inputs the ``outputs`` depend on when the tensors in ``stop`` are given."""
+    """Which of the graph's inputs (initializers excluded) the ``outputs`` depend on when the tensors
+    in ``stop`` are given (those count as read when reached)."""
     producer = {name: node for node in graph.node for name in node.output if name}
-    inputs = {v.name for v in graph.input}
+    inputs = {v.name for v in graph.input} - {t.name for t in graph.initializer}
     seen: set[str] = set()
     read: set[str] = set()
     todo = list(outputs)
@@ -105,21 +116,43 @@ def split_owl(model_path: Path | str, signature: IOSignature, what: str, threads
     has_embeds = any(TEXT_EMBEDS in n.output for n in graph.node) or any(v.name == TEXT_EMBEDS for v in graph.output)
     if not has_embeds:
         raise SplitError(f"{what}: the graph has no {TEXT_EMBEDS!r} tensor to cut at")
-    read = _graph_inputs_read(graph, IMAGE_OUTPUTS, {TEXT_EMBEDS})
-    if TEXT_EMBEDS not in read or "attention_mask" in read:
-        raise SplitError(f"{what}: the class head does not read the text tower only through {TEXT_EMBEDS!r}")
-    image_inputs = tuple(n for n in ("pixel_values", TEXT_EMBEDS, "input_ids") if n in read)
+    cut = _cut_tensor(graph, what)
+    read = _graph_inputs_read(graph, IMAGE_OUTPUTS, {cut})
+    if cut not in read or "attention_mask" in read:
+        raise SplitError(f"{what}: the class head does not read the text tower only through {cut!r}")
+    image_inputs = tuple(n for n in ("pixel_values", cut, "input_ids") if n in read)
+    known = {v.name for v in list(graph.value_info) + list(graph.input) + list(graph.output)}
+    if cut not in known:  # an intermediate tensor without a recorded type: give it the embeddings' type
+        import onnx.helper
+
+        out = next((v for v in graph.output if v.name == TEXT_EMBEDS), None)
+        elem = out.type.tensor_type.elem_type if out is not None else onnx.TensorProto.FLOAT
+        graph.value_info.append(onnx.helper.make_tensor_value_info(cut, elem, None))
     try:
         extractor = Extractor(model)
-        text_model = extractor.extract_model(list(TEXT_INPUTS), [TEXT_EMBEDS])
+        text_model = extractor.extract_model(list(TEXT_INPUTS), [cut])
         image_model = extractor.extract_model(list(image_inputs), list(IMAGE_OUTPUTS))
         text_bytes, image_bytes = text_model.SerializeToString(), image_model.SerializeToString()
     except Exception as exc:
         raise SplitError(f"{what}: cutting the graph failed: {exc}") from exc
     del model, extractor, text_model, image_model
-    return OwlParts(
-        text=session_from(text_bytes, f"{what} (text part)", threads),
-        image=session_from(image_bytes, f"{what} (image part)", threads),
-        image_inputs=image_inputs,
-        signature=actual,
-    )
+    try:
+        text = session_from(text_bytes, f"{what} (text part)", threads)
+        image = session_from(image_bytes, f"{what} (image part)", threads)
+    except ModelError as exc:
+        raise SplitError(f"{what}: a part of the cut graph does not load: {exc}") from exc
+    return OwlParts(text=text, image=image, image_inputs=image_inputs, signature=actual, text_output=cut)
+
+
+def _cut_tensor(graph: Any, what: str) -> str:
+    """``text_embeds``, or the tensor below its shape-only producers that reads the text inputs only."""
+    producer = {name: node for node in graph.node for name in node.output if name}
+    cut = TEXT_EMBEDS
+    for _ in range(16):
+        if _graph_inputs_read(graph, (cut,), set()) <= set(TEXT_INPUTS):
+            return cut
+        node = producer.get(cut)
+        if node is None or node.op_type not in SHAPE_ONLY_OPS or not node.input:
+            break
+        cut = node.input[0]
+    raise SplitError(f"{what}: the text embeddings depend on the image (no text-only tensor below {TEXT_EMBEDS!r})")
