@@ -32,6 +32,7 @@ from .mapping_job import MappingJob, Perceiver
 from .mission_view import MissionRunner, MissionView
 from .objects_view import ObjectsView
 from .paths_view import PathsView
+from .client_notice import tell
 from .robot_view import RobotView, is_alert
 from .scene_watch import FrameError, NotReady, SceneWatcher, objects_to_world
 from .session import JOB, NOTICE, SESSION_FILE, JobStatus, Notice, RobotSnapshot, Session, SessionError
@@ -331,18 +332,14 @@ class ConsoleApp:
             listing.content = ("<small>saved: " + ", ".join(f"<code>{html.escape(s)}</code>" for s in saves[:12])
                                + "</small>") if saves else ""
 
-        def tell(event: Any, title: str, body: str, color: str) -> None:
-            if event.client is not None:
-                event.client.add_notification(title, body, color=color, auto_close_seconds=6.0)
-
         @save.on_click
         def _(event: Any) -> None:
             try:
                 path = session.save(str(name.value))
             except SessionError as exc:
-                tell(event, "Not saved", str(exc), "red")
+                tell(event.client, "Not saved", str(exc), "red")
                 return
-            tell(event, "Saved", f"{path.name} in the session folder", "green")
+            tell(event.client, "Saved", f"{path.name} in the session folder", "green")
             refresh()
 
         @load.on_click
@@ -350,18 +347,17 @@ class ConsoleApp:
             try:
                 notes = session.load(str(name.value))
             except SessionError as exc:
-                tell(event, "Not loaded", str(exc), "red")
+                tell(event.client, "Not loaded", str(exc), "red")
                 return
-            tell(event, "Loaded", "; ".join(notes) or f"{name.value}", "green")
+            tell(event.client, "Loaded", "; ".join(notes) or f"{name.value}", "green")
 
         refresh()
 
     # --- events ---------------------------------------------------------------------------------------
     def _on_capture(self, event: Any) -> None:
         assert self.mapping is not None
-        if not self.mapping.start() and event.client is not None:
-            event.client.add_notification("Busy", "a capture is already being mapped", color="yellow",
-                                          auto_close_seconds=4.0)
+        if not self.mapping.start():
+            tell(event.client, "Busy", "a capture is already being mapped", "yellow", 4.0)
 
     def _on_session_event(self, topic: str, payload: Any) -> None:
         if topic == NOTICE:
@@ -374,8 +370,7 @@ class ConsoleApp:
             return
         color = {"error": "red", "warning": "yellow", "success": "green"}.get(notice.level, "blue")
         for client in self.server.get_clients().values():
-            client.add_notification(notice.title, notice.body, color=color,
-                                    auto_close_seconds=None if notice.level == "error" else 6.0)
+            tell(client, notice.title, notice.body, color, None if notice.level == "error" else 6.0)
 
     def _show_job(self, job: JobStatus) -> None:
         assert self.mapping is not None

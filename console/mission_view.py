@@ -15,6 +15,7 @@ import viser
 
 from planner.mission import Mission, SegmentKind
 
+from .client_notice import tell
 from .paths_view import KIND_RGB
 from .session import MISSION, RUN, RunStatus, Session, SessionError
 
@@ -85,35 +86,30 @@ class MissionView:
         if topic in (MISSION, RUN):
             self.refresh()
 
-    @staticmethod
-    def _tell(event: Any, title: str, body: str, color: str) -> None:
-        if event.client is not None:
-            event.client.add_notification(title, body, color=color, auto_close_seconds=6.0)
-
     def _on_build(self, event: Any) -> None:
         try:
             mission = self._session.build_mission()
         except SessionError as exc:
-            self._tell(event, "No mission", str(exc), "yellow")
+            tell(event.client, "No mission", str(exc), "yellow")
             return
         kinds = " → ".join(mission.kinds())
-        self._tell(event, "Mission built", f"{len(mission.segments)} segments: {kinds}", "green")
+        tell(event.client, "Mission built", f"{len(mission.segments)} segments: {kinds}", "green")
 
     def _on_execute(self, event: Any) -> None:
         mission = self._session.mission
         if mission is None:
-            self._tell(event, "No mission", "build the mission first", "yellow")
+            tell(event.client, "No mission", "build the mission first", "yellow")
             return
         if self._runner is None:
-            self._tell(event, "Cannot execute", "this robot link has no mission manager", "red")
+            tell(event.client, "Cannot execute", "this robot link has no mission manager", "red")
             return
         if self._session.run.active:
-            self._tell(event, "Already running", "pause or abort the running mission first", "yellow")
+            tell(event.client, "Already running", "pause or abort the running mission first", "yellow")
             return
         try:
             self._runner.execute(mission)
         except Exception as exc:  # the link refuses (not armed, link down, geofence ...)
-            self._tell(event, "Cannot execute", str(exc), "red")
+            tell(event.client, "Cannot execute", str(exc), "red")
 
     def _call(self, event: Any, what: str) -> None:
         if self._runner is None:
@@ -121,7 +117,7 @@ class MissionView:
         try:
             getattr(self._runner, what)()
         except Exception as exc:
-            self._tell(event, f"Cannot {what}", str(exc), "red")
+            tell(event.client, f"Cannot {what}", str(exc), "red")
 
     def refresh(self) -> None:
         """Redraw the segment list, buttons and progress from the session."""

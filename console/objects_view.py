@@ -24,6 +24,7 @@ import viser
 
 from pipeline.scene import SceneObject
 
+from .client_notice import tell
 from .session import SCENE, SELECTION, Session, SessionError
 
 log = logging.getLogger(__name__)
@@ -373,17 +374,12 @@ class ObjectsView:
         try:
             notes = self.drop(object_id, xy, yaw)
         except SessionError as exc:
-            if client is not None:
-                client.add_notification("Cannot move", str(exc), color="red", auto_close_seconds=6.0)
+            tell(client, "Cannot move", str(exc), "red")
             return
-        if notes is not None and client is not None:
-            client.add_notification("Moved", "; ".join(notes) or "grid rebuilt", color="blue", auto_close_seconds=6.0)
+        if notes is not None:
+            tell(client, "Moved", "; ".join(notes) or "grid rebuilt")
 
     # --- operator actions -----------------------------------------------------------------------
-    def _notify(self, event: Any, title: str, body: str, color: str = "red") -> None:
-        if event.client is not None:
-            event.client.add_notification(title, body, color=color, auto_close_seconds=6.0)
-
     def _on_choose(self, event: Any) -> None:
         if event.client is None:
             return  # set by the server itself (mirroring a selection)
@@ -398,31 +394,31 @@ class ObjectsView:
         try:
             self._session.select(value)
         except SessionError as exc:
-            self._notify(event, "Cannot select", str(exc))
+            tell(event.client, "Cannot select", str(exc), "red")
 
     def _on_move(self, event: Any) -> None:
         obj = self._session.selected
         if obj is None:
-            self._notify(event, "Nothing selected", "click an object first")
+            tell(event.client, "Nothing selected", "click an object first", "red")
             return
         try:
             notes = self._session.move_object(obj.id, tuple(self._pos.value), math.radians(float(self._yaw.value)))
         except SessionError as exc:
-            self._notify(event, "Cannot move", str(exc))
+            tell(event.client, "Cannot move", str(exc), "red")
             return
-        self._notify(event, f"Moved {obj.label}", "; ".join(notes) or "grid rebuilt", color="blue")
+        tell(event.client, f"Moved {obj.label}", "; ".join(notes) or "grid rebuilt", color="blue")
 
     def _on_delete(self, event: Any) -> None:
         obj = self._session.selected
         if obj is None:
-            self._notify(event, "Nothing selected", "click an object first")
+            tell(event.client, "Nothing selected", "click an object first", "red")
             return
         try:
             notes = self._session.delete_object(obj.id)
         except SessionError as exc:
-            self._notify(event, "Cannot delete", str(exc))
+            tell(event.client, "Cannot delete", str(exc), "red")
             return
-        self._notify(event, f"Deleted {obj.label}", "; ".join(notes) or "grid rebuilt", color="blue")
+        tell(event.client, f"Deleted {obj.label}", "; ".join(notes) or "grid rebuilt", color="blue")
 
     def colors(self, label: str) -> tuple[int, int, int]:
         """Display colour of a label (the catalog's, else a stable hashed one)."""

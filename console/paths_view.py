@@ -19,6 +19,7 @@ import viser
 
 from planner.mission import Mission, SegmentKind
 
+from .client_notice import tell
 from .session import MISSION, ROUTE, SETTINGS, Session, SessionError
 
 log = logging.getLogger(__name__)
@@ -117,29 +118,24 @@ class PathsView:
         try:
             goal = self._session.goal_from_ray(origin, direction)
         except SessionError as exc:
-            self._tell(client, "No goal there", str(exc), "yellow")
+            tell(client, "No goal there", str(exc), "yellow", 7.0)
             return False
         res = self._session.add_goal(goal)
         if not res.ok:
-            self._tell(client, "Goal not reachable", res.message, "red")
+            tell(client, "Goal not reachable", res.message, "red", 7.0)
             return False
-        self._tell(client, "Candidate path",
+        tell(client, "Candidate path",
                    f"to ({goal[0]:.2f}, {goal[1]:.2f}, {goal[2]:.2f}) m: {res.message}. Register to keep it.", "blue", 4.0)
         return True
-
-    @staticmethod
-    def _tell(client: Any, title: str, body: str, color: str, seconds: float = 7.0) -> None:
-        if client is not None:
-            client.add_notification(title, body, color=color, auto_close_seconds=seconds)
 
     def _act(self, event: Any, action: Any, title: str | None) -> None:
         try:
             msg = action()
         except SessionError as exc:
-            self._tell(event.client, "Not possible", str(exc), "yellow")
+            tell(event.client, "Not possible", str(exc), "yellow", 7.0)
             return
         if title and isinstance(msg, str):
-            self._tell(event.client, title, msg, "green", 3.0)
+            tell(event.client, title, msg, "green", 3.0)
 
     def _on_click_toggle(self, event: Any) -> None:
         if event.client is not None:
@@ -151,7 +147,7 @@ class PathsView:
         try:
             self._session.set_goal_mode(str(self._mode.value), float(self._alt.value))
         except SessionError as exc:
-            self._tell(event.client, "Invalid goal altitude", str(exc), "red")
+            tell(event.client, "Invalid goal altitude", str(exc), "red", 7.0)
             self._sync_settings()
 
     # --- drawing -----------------------------------------------------------------------------------
