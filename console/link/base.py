@@ -79,6 +79,15 @@ class RobotState:
         messages: The robot's latest status messages, oldest first, as ``(number, text)``; ``number``
             counts every message since the link opened (so a listener can tell new ones) and
             ``text`` starts with the severity (MAVLink STATUSTEXT: ``"WARNING: PreArm: Need 3D Fix"``).
+        position_valid: Whether ``position`` is a fresh, valid estimate. False before the first
+            valid position (``position`` is then only a finite placeholder: do not draw it as known)
+            and while the position stream is stale.
+        pose_age: Time since the last valid position [s] (``inf`` before the first; 0 for the simulator).
+        ready: Whether the robot can take off now (position estimate, EKF, pre-arm checks).
+        readiness: Why it is not ready, for the operator (``""`` when ready).
+        warnings: Standing warnings about the link or the vehicle (shared system id, failsafe
+            parameters off, world frame moved by a reboot ...).
+        link_epoch: Counts detected reboots / reconnects of the robot since the link opened.
     """
 
     time: float
@@ -95,6 +104,12 @@ class RobotState:
     health: str = "ok"
     autopilot_mode: str = ""
     messages: tuple[tuple[int, str], ...] = ()
+    position_valid: bool = True
+    pose_age: float = 0.0
+    ready: bool = True
+    readiness: str = ""
+    warnings: tuple[str, ...] = ()
+    link_epoch: int = 0
 
     @property
     def pose(self) -> Pose:
@@ -355,6 +370,17 @@ class RobotLink(abc.ABC):
     def subscribe(self, callback: StateListener) -> Callable[[], None]:
         """Call ``callback(state)`` for every new state; returns an unsubscribe function."""
         return self._stream.subscribe(callback)
+
+    def link_age_now(self) -> float:
+        """Seconds since the robot was last heard with fresh telemetry, read now (failsafe use).
+
+        Links with live clocks override this; the default ages the latest sample by the time
+        since it was taken (``inf`` before the first sample)."""
+        st = self.latest_state()
+        if st is None:
+            return float("inf")
+        pose_age = st.pose_age if st.pose_age != float("inf") else 0.0
+        return max(st.link_age, pose_age) + max(0.0, time.time() - st.time)
 
     # --- camera ----------------------------------------------------------------------------------
     @abc.abstractmethod
