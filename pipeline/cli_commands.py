@@ -94,12 +94,15 @@ def _catalog(args: argparse.Namespace) -> Catalog:
 def cmd_map(args: argparse.Namespace) -> int:
     """``morphonavi map IMAGE --camera CAMERA.toml [--pose x,y,z,yaw] [--prompts ...] --out scene.json``."""
     from pipeline.geometry import Pose, load_camera_toml, parse_pose
-    from pipeline.image_io import load_image
+    from pipeline.image_io import read_image
     from pipeline.mapper import Mapper, prompts_from_words
 
     camera = load_camera_toml(args.camera)
-    pose = parse_pose(args.pose) if args.pose else Pose()
-    image = load_image(args.image)
+    pose = parse_pose(args.pose, "--pose") if args.pose is not None else Pose()
+    loaded = read_image(args.image)
+    if loaded.note:
+        print(loaded.note)
+    image = loaded.image
     catalog = _catalog(args)
     if args.prompts is not None:
         prompts_from_words(catalog, args.prompts)  # empty list -> error before loading models

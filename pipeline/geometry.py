@@ -11,18 +11,12 @@ Rotations use :class:`scipy.spatial.transform.Rotation` (no hand-rolled Euler co
 from __future__ import annotations
 
 import math
-import sys
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Mapping, Sequence
 
 import numpy as np
 from scipy.spatial.transform import Rotation
-
-if sys.version_info >= (3, 11):
-    import tomllib
-else:  # pragma: no cover - exercised on Python 3.10 only
-    import tomli as tomllib
 
 
 class CameraError(ValueError):
@@ -44,10 +38,14 @@ class Intrinsics:
     def __post_init__(self) -> None:
         for name in ("fx", "fy", "cx", "cy"):
             v = getattr(self, name)
-            if not isinstance(v, (int, float)) or not math.isfinite(v):
+            if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
                 raise CameraError(f"intrinsics.{name}: must be a finite number, got {v!r}")
         if self.fx <= 0 or self.fy <= 0:
             raise CameraError(f"intrinsics: focal lengths must be > 0, got fx={self.fx}, fy={self.fy}")
+        for name in ("width", "height"):
+            v = getattr(self, name)
+            if isinstance(v, bool) or not isinstance(v, (int, np.integer)):
+                raise CameraError(f"intrinsics.{name}: must be a whole number of pixels, got {v!r}")
         if self.width <= 0 or self.height <= 0:
             raise CameraError(f"intrinsics: image size must be > 0, got {self.width}x{self.height}")
         if not (0 <= self.cx <= self.width and 0 <= self.cy <= self.height):
@@ -57,6 +55,9 @@ class Intrinsics:
             )
         if len(self.dist) not in (0, 4, 5, 8, 12, 14):
             raise CameraError(f"intrinsics.dist: expected 0, 4, 5, 8, 12 or 14 coefficients, got {len(self.dist)}")
+        for i, d in enumerate(self.dist):
+            if isinstance(d, bool) or not isinstance(d, (int, float)) or not math.isfinite(d):
+                raise CameraError(f"intrinsics.dist[{i}]: must be a finite number, got {d!r}")
 
     @property
     def K(self) -> np.ndarray:
@@ -78,8 +79,15 @@ class Intrinsics:
     def check_image(self, width: int, height: int) -> None:
         """Raise if an image of this size does not match these intrinsics."""
         if (width, height) != (self.width, self.height):
+            hint = ""
+            if width * self.height == height * self.width or abs(width / self.width - height / self.height) < 0.01:
+                hint = (f" (resized by {width / self.width:.3g}? the intrinsics must be for the image as given: "
+                        f"scale fx, fy, cx, cy and width, height by the same factor)")
+            elif (width, height) == (self.height, self.width):
+                hint = " (rotated? the intrinsics describe the upright image, EXIF orientation applied)"
             raise CameraError(
-                f"intrinsics are for a {self.width}x{self.height} image but the image is {width}x{height}"
+                f"intrinsics.width x intrinsics.height: the intrinsics are for a {self.width}x{self.height} image "
+                f"but the image is {width}x{height}{hint}"
             )
 
     def to_dict(self) -> dict[str, float]:
@@ -218,85 +226,31 @@ class CameraConfig:
     mount: CameraMount = field(default_factory=CameraMount)
 
 
-def _num(table: Mapping[str, Any], key: str, where: str, default: float | None = None) -> float:
-    if key not in table:
-        if default is None:
-            raise CameraError(f"{where}.{key}: is required")
-        return default
-    v = table[key]
-    if isinstance(v, bool) or not isinstance(v, (int, float)):
-        raise CameraError(f"{where}.{key}: must be a number, got {v!r}")
-    return float(v)
-
-
 def load_camera_toml(path: str | Path) -> CameraConfig:
-    """Read ``camera.toml``.
+    """Read and validate ``camera.toml`` (see :mod:`pipeline.camera_file` for the format and checks)."""
+    from pipeline.camera_file import load_camera_toml as load
 
-    Format::
-
-        [intrinsics]            # pixels, for the image files given with it
-        fx = 525.0
-        fy = 525.0
-        cx = 319.5
-        cy = 239.5
-        width = 640
-        height = 480
-        dist = []               # optional OpenCV distortion coefficients
-
-        [mount]                 # optional; robot body frame (x fwd, y left, z up)
-        position = [0.15, 0.0, 0.35]   # metres
-        pitch_deg = 10.0        # optical axis tilted down
-        yaw_deg = 0.0
-        roll_deg = 0.0
-    """
-    p = Path(path)
-    try:
-        data = tomllib.loads(p.read_text(encoding="utf-8"))
-    except FileNotFoundError:
-        raise CameraError(f"camera file not found: {p}") from None
-    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
-        raise CameraError(f"camera file {p} is not valid TOML: {exc}") from None
-    return camera_config_from_dict(data)
+    return load(path)
 
 
 def camera_config_from_dict(data: Mapping[str, Any]) -> CameraConfig:
-    """Build a :class:`CameraConfig` from a parsed ``camera.toml`` mapping."""
-    intr_t = data.get("intrinsics")
-    if not isinstance(intr_t, dict):
-        raise CameraError("[intrinsics]: table is required")
-    dist = intr_t.get("dist", [])
-    if not isinstance(dist, list):
-        raise CameraError("intrinsics.dist: must be a list of numbers")
-    intr = Intrinsics(
-        _num(intr_t, "fx", "intrinsics"), _num(intr_t, "fy", "intrinsics"),
-        _num(intr_t, "cx", "intrinsics"), _num(intr_t, "cy", "intrinsics"),
-        int(_num(intr_t, "width", "intrinsics")), int(_num(intr_t, "height", "intrinsics")),
-        tuple(float(d) for d in dist),
-    )
-    mount_t = data.get("mount", {})
-    if not isinstance(mount_t, dict):
-        raise CameraError("[mount]: must be a table")
-    pos = mount_t.get("position", list(CameraMount().position))
-    if not isinstance(pos, list) or len(pos) != 3:
-        raise CameraError(f"mount.position: must be 3 numbers [m], got {pos!r}")
-    mount = CameraMount(
-        position=(float(pos[0]), float(pos[1]), float(pos[2])),
-        pitch=math.radians(_num(mount_t, "pitch_deg", "mount", 0.0)),
-        yaw=math.radians(_num(mount_t, "yaw_deg", "mount", 0.0)),
-        roll=math.radians(_num(mount_t, "roll_deg", "mount", 0.0)),
-    )
-    return CameraConfig(intr, mount)
+    """Build a validated :class:`CameraConfig` from a parsed ``camera.toml`` mapping."""
+    from pipeline.camera_file import camera_config_from_dict as build
+
+    return build(data)
 
 
-def parse_pose(text: str) -> Pose:
-    """Parse ``x,y,z,yaw`` (metres, degrees) as given on the command line into a world pose."""
-    parts = [p for p in text.replace(" ", "").split(",") if p]
+def parse_pose(text: str, where: str = "pose") -> Pose:
+    """Parse ``x,y[,z[,yaw]]`` (metres, degrees) as given on the command line into a world pose.
+
+    ``where`` names the option in errors (``--pose: empty value; expected 'x,y[,z[,yaw_deg]]'``).
+    """
+    from pipeline.option_values import ValueListError, parse_numbers
+
     try:
-        vals = [float(p) for p in parts]
-    except ValueError:
-        raise CameraError(f"pose {text!r}: expected numbers 'x,y,z,yaw_deg'") from None
-    if len(vals) not in (2, 3, 4) or not all(math.isfinite(v) for v in vals):
-        raise CameraError(f"pose {text!r}: expected 'x,y[,z[,yaw_deg]]' in metres and degrees")
+        vals = parse_numbers(text, where, (2, 3, 4), "x,y[,z[,yaw_deg]] in metres and degrees")
+    except ValueListError as exc:
+        raise CameraError(str(exc)) from None
     x, y = vals[0], vals[1]
     z = vals[2] if len(vals) > 2 else 0.0
     yaw = math.radians(vals[3]) if len(vals) > 3 else 0.0
