@@ -11,7 +11,10 @@ optical frame (x right, y down, z forward).
 
 Persistence: the session folder holds ``session.json`` (scene, route, mission, settings, the
 last capture's metadata, written after every change) and ``captures/`` (photo and depth of the
-last capture). Names typed by the operator are resolved with :meth:`Session.resolve_name`, which
+last capture); the code is :class:`console.session_store.Persistence`, mixed in here. Map edits
+(spawn, move, delete, capture, load) can be undone with :meth:`Session.undo_edit`; scenes with
+implausible objects are refused naming the field (:func:`pipeline.scene.check_plausible`). Names
+typed by the operator are resolved with :meth:`Session.resolve_name`, which
 refuses anything that would land outside the session folder.
 
 The pieces live next door and are re-exported here: topics in :mod:`console.topics`, value types
@@ -34,11 +37,13 @@ from planner.grid import CostWeights, GridError, PlanningGrid, Workspace, build_
 from planner.mission import Mission, MissionError
 from planner.route import PlanResult, Route, path_points
 
-from . import session_store
-from .capture_files import CAPTURE_DIR, read_capture_files, write_capture_files
+from pipeline.scene import SceneError, check_plausible
+
+from .capture_files import CAPTURE_DIR
+from .history import History, SceneState
 from .merge import merge_observations
 from .picking import goal_on_plane, ray_plane
-from .session_store import SESSION_FILE, SESSION_VERSION
+from .session_store import SESSION_FILE, SESSION_VERSION, Persistence
 from .session_types import (
     CaptureRecord, Detection, JobStatus, Notice, RobotSnapshot, RouteSnapshot, RunStatus, SessionError, Settings,
     SpawnReport, Vec3, fmt_point,
@@ -57,8 +62,8 @@ __all__ = [
 log = logging.getLogger(__name__)
 
 
-class Session:
-    """All console state, thread-safe, observable, persisted in one folder.
+class Session(Persistence):
+    """All console state, thread-safe, observable, persisted in one folder (see :class:`Persistence`).
 
     Args:
         folder: Session folder (created); saves and capture images go there.
@@ -98,6 +103,9 @@ class Session:
         self._selected: str | None = None
         self._settings = Settings()
         self._last_save_error: str | None = None
+        self._restore_problems: list[str] = []
+        self._outbox: list[Notice] = []  # notices raised under the lock, sent by the next _emit
+        self._history = History()
 
     # --- observers -----------------------------------------------------------------------------
     def subscribe(self, listener: Listener) -> Callable[[], None]:
@@ -115,7 +123,8 @@ class Session:
     def _emit(self, events: Sequence[tuple[str, Any]]) -> None:
         with self._lock:
             listeners = list(self._listeners)
-        for topic, payload in events:
+            queued, self._outbox = self._outbox, []
+        for topic, payload in [(NOTICE, n) for n in queued] + list(events):
             for listener in listeners:
                 try:
                     listener(topic, payload)
@@ -305,11 +314,16 @@ class Session:
 
     # --- scene -----------------------------------------------------------------------------------
     def spawn(self, scene: Scene, origin: str = "") -> SpawnReport:
-        """Add world-frame objects (re-sightings update the known object), rebuild the grid, replan."""
+        """Add world-frame objects (re-sightings update the known object), rebuild the grid, replan.
+
+        Raises :class:`SessionError` naming the field of an implausible object; nothing changes then.
+        """
+        what = f" from {origin}" if origin else ""
+        self.check_plausible(scene, f"refused{what}")
+        key = origin.replace(" ", ":", 1) if origin.startswith("capture ") else ""  # one undo step with set_capture
         with self._lock:
             merged, added, updated = merge_observations(self._scene, scene)
-            notes = self._set_scene_locked(merged)
-        what = f" from {origin}" if origin else ""
+            notes = self._set_scene_locked(merged, f"spawn{what}", key)
         log.info("spawned %d new and %d updated objects%s", len(added), len(updated), what)
         self._emit([(SCENE, None), (GRID, None), (ROUTE, None), (MISSION, None)])
         return SpawnReport(tuple(added), tuple(updated), tuple(notes))
@@ -322,9 +336,7 @@ class Session:
             except KeyError:
                 raise SessionError(f"no object {object_id!r} in the map (was it deleted in another tab?)") from None
             scene = self._scene.with_objects([o for o in self._scene.objects if o.id != object_id])
-            if self._selected == object_id:
-                self._selected = None
-            notes = self._set_scene_locked(scene)
+            notes = self._set_scene_locked(scene, f"delete {object_id}")
         self._emit([(SCENE, None), (GRID, None), (ROUTE, None), (MISSION, None), (SELECTION, None)])
         return notes
 
@@ -344,7 +356,7 @@ class Session:
             except KeyError:
                 raise SessionError(f"no object {object_id!r} in the map (was it deleted in another tab?)") from None
             objs = [obj.moved(p, yaw) if o.id == object_id else o for o in self._scene.objects]  # type: ignore[arg-type]
-            notes = self._set_scene_locked(self._scene.with_objects(objs))
+            notes = self._set_scene_locked(self._scene.with_objects(objs), f"move {object_id}")
         self._emit([(SCENE, None), (GRID, None), (ROUTE, None), (MISSION, None), (SELECTION, object_id)])
         return notes
 
@@ -359,15 +371,35 @@ class Session:
             self._selected = object_id
         self._emit([(SELECTION, object_id)])
 
-    def _set_scene_locked(self, scene: Scene) -> list[str]:
+    def check_plausible(self, scene: Scene, what: str = "refused") -> None:
+        """Raise :class:`SessionError` (``what: objects[0].size[0]: ...``) for objects no room holds."""
+        ws = self._workspace
+        try:
+            check_plausible(scene, ws.min, ws.max)
+        except SceneError as exc:
+            raise SessionError(f"{what}: {exc}") from None
+
+    def _set_scene_locked(self, scene: Scene, label: str, key: str = "") -> list[str]:
+        """Swap in ``scene`` (undoably, as ``label``); warns every tab when registered segments are lost."""
         try:
             grid = build_grid(scene, self._workspace, self._margin)
         except GridError as exc:
             raise SessionError(f"cannot build the planning grid: {exc}") from None
+        self._remember_locked(label, key)
+        old_grid, had_mission = self._grid, self._mission is not None
+        goals = [tuple(path_points(seg, old_grid)[-1]) for seg in self._route.registered if len(seg)]
         self._scene = scene
         self._grid = grid
         notes = self._route.set_grid(grid)
         self._mission = None
+        kept = len(self._route.registered)
+        if kept < len(goals):
+            segs = f"segment {kept + 1}" if kept + 1 == len(goals) else f"segments {kept + 1}-{len(goals)}"
+            to = ", ".join(fmt_point(g) for g in goals[kept:])
+            self._outbox.append(Notice(
+                "Route segments removed",
+                f"{label}: registered {segs} (to {to}) now cross obstacles and were removed"
+                + ("; the mission was retired" if had_mission else "") + ". Undo brings them back.", "warning"))
         if self._selected is not None and self._selected not in {o.id for o in scene.objects}:
             self._selected = None
         self._save_locked()
@@ -377,6 +409,7 @@ class Session:
     def set_capture(self, record: CaptureRecord) -> None:
         """Show a new capture (photo, detections, depth, camera pose); saved with the session."""
         with self._lock:
+            self._remember_locked(f"capture {record.id}", f"capture:{record.id}")
             self._capture = record
             self._capture_meta = self._store_capture_locked(record)
             self._save_locked()
@@ -432,108 +465,43 @@ class Session:
             self._route.propose(goal)
         return True
 
+    # --- undo ------------------------------------------------------------------------------------
+    def _remember_locked(self, label: str, key: str = "") -> None:
+        """Push the state before an edit (see :mod:`console.history`)."""
+        self._history.push(SceneState(label, self._scene, self._grid, self._route.to_dict(), self._mission,
+                                      self._capture, self._capture_meta, key))
+
+    @property
+    def undo_label(self) -> str | None:
+        """What :meth:`undo_edit` would undo (``move box-3``), or ``None`` when there is nothing."""
+        with self._lock:
+            top = self._history.peek()
+            return None if top is None else top.label
+
+    def undo_edit(self) -> str:
+        """Put the map back as it was before the last spawn, move, delete, capture or load.
+
+        Scene, grid, registered route, mission and last capture come back together; the route start
+        then follows the robot as after any change. Returns what was undone.
+        """
+        with self._lock:
+            if self._run.active:
+                raise SessionError("a mission is under way (running or paused): abort it before undoing map edits")
+            state = self._history.pop()
+            if state is None:
+                raise SessionError("nothing to undo: no map edit since the console started")
+            route = Route(state.grid, self._route.start, self._weights)
+            route.restore(state.route)
+            self._scene, self._grid, self._route, self._mission = state.scene, state.grid, route, state.mission
+            self._capture, self._capture_meta = state.capture, state.capture_meta
+            if self._selected is not None and self._selected not in {o.id for o in state.scene.objects}:
+                self._selected = None
+            self._sync_start_locked()
+            self._save_locked()
+            cap = self._capture
+        self._emit([(SCENE, None), (GRID, None), (ROUTE, None), (MISSION, None), (SELECTION, self._selected)]
+                   + ([(CAPTURE, cap)] if cap is not None else []))
+        return f"undone: {state.label}"
+
     def _floor_point(self, p: Sequence[float]) -> Vec3:
         return (float(p[0]), float(p[1]), self._workspace.floor)
-
-    # --- persistence -----------------------------------------------------------------------------
-    def resolve_name(self, name: str) -> Path:
-        """The session-folder file a typed name refers to (``.json`` added if missing).
-
-        Raises :class:`SessionError` for empty names, absolute paths, odd characters, and any name
-        that resolves (through ``..`` or symbolic links) outside the session folder.
-        """
-        return session_store.resolve_name(self.folder, name)
-
-    def list_saves(self) -> list[str]:
-        """Names of the session files in the session folder (newest first)."""
-        return session_store.list_saves(self.folder)
-
-    def to_dict(self) -> dict[str, Any]:
-        """The whole persistent state as a JSON-ready dict."""
-        with self._lock:
-            return session_store.session_to_dict(self._workspace, self._margin, self._scene, self._route,
-                                                 self._mission, self._settings, self._capture_meta)
-
-    def save(self, name: str | None = None) -> Path:
-        """Write the session to ``session.json`` or to the typed ``name`` in the session folder."""
-        path = self.folder / SESSION_FILE if name is None else self.resolve_name(name)
-        with self._lock:
-            data = self.to_dict()
-        try:
-            session_store.write_session_file(path, data)
-        except OSError as exc:
-            raise SessionError(f"cannot write {path.name}: {exc}") from None
-        return path
-
-    def _save_locked(self) -> None:
-        if not self._autosave:
-            return
-        try:
-            session_store.write_session_file(self.folder / SESSION_FILE, self.to_dict())
-            self._last_save_error = None
-        except (OSError, TypeError, ValueError) as exc:  # keep working; tell the operator once
-            if self._last_save_error != str(exc):
-                self._last_save_error = str(exc)
-                log.error("autosave to %s failed: %s", self.folder / SESSION_FILE, exc)
-
-    def load(self, name: str | None = None) -> list[str]:
-        """Replace the state with a saved session; returns notes about what could not be kept.
-
-        Raises :class:`SessionError` naming the bad field of a malformed file; the current state
-        is then left untouched.
-        """
-        path = self.folder / SESSION_FILE if name is None else self.resolve_name(name)
-        if self.run.active:
-            raise SessionError("a mission is under way: abort it before loading another session")
-        data = session_store.read_session_file(path, self.folder)
-        notes = self._apply_saved(data, path.name)
-        self._emit([(SCENE, None), (GRID, None), (ROUTE, None), (MISSION, None), (SETTINGS, None),
-                    (SELECTION, None)] + ([(CAPTURE, self.capture)] if self.capture is not None else []))
-        return notes
-
-    def restore_last(self) -> list[str] | None:
-        """Restore ``session.json`` if there is one; ``None`` if there is nothing to restore."""
-        if not (self.folder / SESSION_FILE).exists():
-            return None
-        return self.load(None)
-
-    def _apply_saved(self, data: Any, where: str) -> list[str]:
-        saved = session_store.parse_saved(data, where)
-        mission = saved.mission
-        notes: list[str] = []
-        ws = self._workspace
-        same_ws = session_store.same_workspace(saved.workspace, ws)
-        with self._lock:
-            old = (self._scene, self._grid, self._route, self._mission)
-            try:
-                grid = build_grid(saved.scene, ws, self._margin)
-                route = Route(grid, self._route.start, self._weights)
-                if isinstance(saved.route, dict) and same_ws:
-                    notes += route.restore(saved.route)
-                elif saved.route:
-                    notes.append("the saved route was planned on a different workspace grid and was dropped")
-                    mission = None
-            except (KeyError, TypeError, ValueError, IndexError) as exc:
-                self._scene, self._grid, self._route, self._mission = old
-                raise SessionError(f"{where}: route is malformed: {exc}") from None
-            self._scene, self._grid, self._route, self._mission = saved.scene, grid, route, mission
-            self._selected = None
-            self._settings = replace(self._settings, goal_mode=saved.goal_mode, altitude=float(saved.altitude))
-            cap_meta = saved.last_capture
-            self._capture, self._capture_meta = None, None
-            if isinstance(cap_meta, dict):
-                try:
-                    self._capture = read_capture_files(self.folder, cap_meta)
-                    self._capture_meta = cap_meta
-                except (KeyError, TypeError, ValueError, OSError) as exc:
-                    notes.append(f"the last capture could not be restored: {exc}")
-            self._save_locked()
-        return notes
-
-    def _store_capture_locked(self, rec: CaptureRecord) -> dict[str, Any] | None:
-        """Write the capture's files; their metadata, or ``None`` (logged) if they cannot be stored."""
-        try:
-            return write_capture_files(self.folder, rec)
-        except OSError as exc:
-            log.error("cannot store capture %s: %s", rec.id, exc)
-            return None

@@ -178,6 +178,48 @@ class Scene:
         return scene_from_json(text)
 
 
+MAX_OBJECT_SIZE = 50.0
+"""No indoor object is larger than this along any axis [m], whatever the workspace."""
+
+FAR_OUTSIDE = 5.0
+"""A world-frame object centre more than this beyond the workspace box is implausible [m]."""
+
+
+def check_plausible(
+    scene: Scene,
+    bounds_min: Sequence[float] | None = None,
+    bounds_max: Sequence[float] | None = None,
+    *,
+    max_size: float = MAX_OBJECT_SIZE,
+    far: float = FAR_OUTSIDE,
+) -> None:
+    """Refuse objects no real room holds; raises :class:`SceneError` naming the first bad field.
+
+    Beside :func:`scene_from_dict` (which checks types and finiteness), this checks magnitudes:
+    every size is at most ``max_size`` and, when the workspace box ``bounds_min..bounds_max``
+    (world frame [m]) is given, at most the workspace diagonal; every world-frame centre lies
+    within ``far`` metres of the box. Objects in the camera or robot frame have only their size
+    checked (their world position is not known yet).
+    """
+    limit, why = max_size, f"max {max_size:g} m"
+    box = None
+    if bounds_min is not None and bounds_max is not None:
+        box = [(float(bounds_min[a]) - far, float(bounds_max[a]) + far) for a in range(3)]
+        diag = math.dist(bounds_min, bounds_max)
+        if diag < limit:
+            limit, why = diag, f"max {diag:.1f} m, the workspace diagonal"
+    for i, obj in enumerate(scene.objects):
+        for a, v in enumerate(obj.size):
+            if not v <= limit:
+                raise SceneError(f"objects[{i}].size[{a}]", f"{v:g} m is implausible ({why})")
+        if box is not None and obj.frame == "world":
+            for a, v in enumerate(obj.position):
+                lo, hi = box[a]
+                if not lo <= v <= hi:
+                    raise SceneError(f"objects[{i}].position[{a}]",
+                                     f"{v:g} m is far outside the workspace (allowed {lo:g}..{hi:g} m)")
+
+
 def write_text_atomic(path: Path, text: str) -> Path:
     """Write ``text`` to ``path`` through a temporary file in the same folder."""
     path.parent.mkdir(parents=True, exist_ok=True)

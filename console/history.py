@@ -1,0 +1,76 @@
+"""Undo for map edits: a bounded history of scene states.
+
+Before each spawn, move, delete, capture or load the session pushes a :class:`SceneState` (the
+scene, its planning grid, the route as saved, the mission, the last capture); :meth:`History.pop`
+hands back the newest one for the session to put back. Everything held is immutable or a copy, so
+a state stays valid however the session changes afterwards. All positions are world frame [m].
+"""
+
+from __future__ import annotations
+
+from collections import deque
+from dataclasses import dataclass
+from typing import Any
+
+from pipeline.scene import Scene
+from planner.grid import PlanningGrid
+from planner.mission import Mission
+
+from .session_types import CaptureRecord
+
+HISTORY_DEPTH = 20
+"""How many edits can be undone, newest first."""
+
+
+@dataclass(frozen=True)
+class SceneState:
+    """What an edit may change, as it was before the edit.
+
+    Attributes:
+        label: What the edit was, for the operator (``move box-3``, ``capture cap-7``).
+        scene: The scene (world frame).
+        grid: Its planning grid.
+        route: :meth:`planner.route.Route.to_dict` of the route (start, registered cells, candidate goal).
+        mission: The mission, or ``None``.
+        capture: The last capture shown, or ``None``.
+        capture_meta: Its stored metadata (``session.json``'s ``last_capture``), or ``None``.
+        key: Edits with the same non-empty key are one step (a capture and the spawn of its objects).
+    """
+
+    label: str
+    scene: Scene
+    grid: PlanningGrid
+    route: dict[str, Any]
+    mission: Mission | None
+    capture: CaptureRecord | None
+    capture_meta: dict[str, Any] | None
+    key: str = ""
+
+
+class History:
+    """The newest ``depth`` states before edits; not thread-safe (the session's lock guards it)."""
+
+    def __init__(self, depth: int = HISTORY_DEPTH) -> None:
+        if depth < 1:
+            raise ValueError(f"history depth must be >= 1, got {depth}")
+        self._states: deque[SceneState] = deque(maxlen=depth)
+
+    def push(self, state: SceneState) -> bool:
+        """Remember ``state``; False (nothing pushed) when it continues the newest step's ``key``."""
+        if state.key and self._states and self._states[-1].key == state.key:
+            return False
+        self._states.append(state)
+        return True
+
+    def pop(self) -> SceneState | None:
+        """The newest state, removed; ``None`` when there is nothing to undo."""
+        return self._states.pop() if self._states else None
+
+    def peek(self) -> SceneState | None:
+        return self._states[-1] if self._states else None
+
+    def __len__(self) -> int:
+        return len(self._states)
+
+    def clear(self) -> None:
+        self._states.clear()
