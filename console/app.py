@@ -2,7 +2,7 @@
 
 :class:`ConsoleApp` builds the pieces and connects them; it holds no state of its own beyond
 handles (the state is :class:`~console.session.Session`). Layout: the control panel on the right
-(robot status, Map, Plan, Mission, Session) and a camera panel on the left (photo with detections,
+(robot status, Mission, Map, Plan, Session) and a camera panel on the left (photo with detections,
 depth); the 3D view shows the workspace, grid layers, objects, paths, the robot twin and the last
 capture's frustum. Every browser tab shares the same scene and controls.
 
@@ -32,14 +32,16 @@ from .mapping_job import MappingJob, Perceiver
 from .mission_view import MissionRunner, MissionView
 from .objects_view import ObjectsView
 from .paths_view import PathsView
-from .client_notice import tell
+from .client_notice import page_style, tell
 from .robot_view import RobotView, is_alert
 from .scene_watch import FrameError, NotReady, SceneWatcher, objects_to_world
+from .wording import plural
 from .session import JOB, NOTICE, SESSION_FILE, JobStatus, Notice, RobotSnapshot, Session, SessionError
 
 log = logging.getLogger(__name__)
 
 BRAND_RGB = (0, 122, 204)
+RIGHT_PANEL_PX = 370  # width of the right-docked control panel [px]
 LOOPBACK_NAMES = ("localhost",)
 
 
@@ -148,14 +150,8 @@ class ConsoleApp:
         ws = Workspace(resolution=cfg.resolution)
         self.session = session = Session(cfg.session_dir, start=start, workspace=ws, margin=cfg.margin)
         restored: list[str] | None = None
-        if not cfg.fresh:
-            try:
-                restored = session.restore_last()
-            except SessionError as exc:
-                kept = session.folder / f"{SESSION_FILE}.unreadable-{time.strftime('%Y%m%d-%H%M%S')}"
-                (session.folder / SESSION_FILE).replace(kept)
-                log.error("the last session could not be restored (%s); it was kept as %s and the console "
-                          "starts empty", exc, kept.name)
+        if not cfg.fresh:  # a bad file is kept aside by the session; SessionError (what to do) if it cannot be
+            restored = session.restore_last()
         perceiver = self._perceiver_override or self._choose_perceiver()
         self.mapping = MappingJob(session, self._take_photo, perceiver)
         self.runner = self._make_runner()
@@ -291,7 +287,11 @@ class ConsoleApp:
         server.initial_camera.up = (0.0, 0.0, 1.0)
 
         paths_holder: dict[str, PathsView] = {}
+        gui.add_html(page_style(RIGHT_PANEL_PX))  # notifications bottom right; the "disconnected" banner
         self.views["robot"] = RobotView(server, session, self.config.robot)
+        # the mission and its run controls right under the robot status: both stay in sight at 1440 x 900
+        with gui.add_folder("Mission"):
+            self.views["mission"] = MissionView(server, session, self.runner)
         with gui.add_folder("Map"):
             cap = gui.add_button("Capture & map", icon=viser.Icon.CAMERA, color="blue",
                                  hint="Ask the robot for a photo and its pose, detect objects and add them to the map")
@@ -304,9 +304,7 @@ class ConsoleApp:
                 layers=self.views["grid"].layers_folder)
         with gui.add_folder("Plan"):
             paths_holder["p"] = self.views["paths"] = PathsView(server, session)
-        with gui.add_folder("Mission"):
-            self.views["mission"] = MissionView(server, session, self.runner)
-        with gui.add_folder("Session", expand_by_default=False):
+        with gui.add_folder("Session", expand_by_default=bool(session.status_text()[1])):
             self._session_controls()
         camera = gui.add_panel()
         with camera.add_tab("Camera", viser.Icon.CAMERA):
@@ -314,14 +312,22 @@ class ConsoleApp:
         camera.dock_left()
         camera.set_width(330)
         server.gui.main_panel.dock_right()
-        server.gui.main_panel.set_width(370)
+        server.gui.main_panel.set_width(RIGHT_PANEL_PX)
 
     def _session_controls(self) -> None:
         server, session = self.server, self.session
         assert server is not None and session is not None
         gui = server.gui
-        gui.add_markdown(f"<small>Folder: <code>{html.escape(str(session.folder))}</code><br>"
-                         "The session is saved after every change and restored at start.</small>")
+        gui.add_markdown(f"<small>Folder: <code>{html.escape(str(session.folder))}</code></small>")
+        status = gui.add_markdown("")
+
+        def show_status() -> None:  # saving works or not, what the restore left out (session_store)
+            text, warn = session.status_text()
+            style = ' style="color:#d62728"' if warn else ""
+            status.content = f"<small{style}>{html.escape(text)}</small>"
+
+        self._show_session_status = show_status
+        show_status()
         name = gui.add_text("Name", "snapshot", hint="A file name inside the session folder (.json is added)")
         save = gui.add_button("Save as", icon=viser.Icon.DEVICE_FLOPPY)
         load = gui.add_button("Load", icon=viser.Icon.FOLDER_OPEN)
@@ -362,6 +368,7 @@ class ConsoleApp:
     def _on_session_event(self, topic: str, payload: Any) -> None:
         if topic == NOTICE:
             self._broadcast(payload)
+            self._show_session_status()
         elif topic == JOB:
             self._show_job(payload)
 
@@ -370,7 +377,7 @@ class ConsoleApp:
             return
         color = {"error": "red", "warning": "yellow", "success": "green"}.get(notice.level, "blue")
         for client in self.server.get_clients().values():
-            tell(client, notice.title, notice.body, color, None if notice.level == "error" else 6.0)
+            tell(client, notice.title, notice.body, color)  # errors stay until closed, the rest close by themselves
 
     def _show_job(self, job: JobStatus) -> None:
         assert self.mapping is not None
@@ -395,7 +402,7 @@ class ConsoleApp:
                 raise NotReady from None  # robot-frame objects: wait for the robot's first pose
             raise
         report = self.session.spawn(world, origin=f"file {name}")
-        self.session.notify("Scene file spawned", f"{name}: {len(report.added)} new, {len(report.updated)} updated objects"
+        self.session.notify("Scene file spawned", f"{name}: {len(report.added)} new, {plural(len(report.updated), 'updated object')}"
                             + ("; " + "; ".join(report.notes) if report.notes else ""), "success")
 
     def _bad_file(self, name: str, message: str) -> None:

@@ -17,10 +17,27 @@ import numpy as np
 import viser
 
 from .objects_view import label_color
+from .photo_marks import depth_colorbar, draw_labels, photo_labels
+from .wording import plural
 from .session import CAPTURE, CaptureRecord, Session
 
 FRUSTUM_RGB = (0, 170, 220)
 PANEL_WIDTH = 480  # [px] of the pictures sent to the browser
+FRUSTUM_SCALE = 0.25  # size of the frustum drawn at the capture pose [m]
+FRUSTUM_PHOTO_ALPHA = 0.45  # opacity of the photo on the frustum: paths behind it stay in sight
+
+
+def frustum_photo(image: np.ndarray, width: int = 240, alpha: float = FRUSTUM_PHOTO_ALPHA) -> np.ndarray:
+    """The photo for the frustum: ``width`` px wide, RGBA with opacity ``alpha`` in [0, 1].
+
+    The frustum stands in front of the robot, right where the first candidate path starts; viser
+    draws see-through textures after the paths, so a translucent photo never hides them.
+    """
+    if not (0.0 <= alpha <= 1.0):
+        raise ValueError(f"alpha: must be in [0, 1], got {alpha!r}")
+    rgb, _ = _fit(np.ascontiguousarray(image[..., :3]), width)
+    a = np.full(rgb.shape[:2] + (1,), round(255 * alpha), np.uint8)
+    return np.ascontiguousarray(np.concatenate([rgb, a], axis=2))
 
 
 def placeholder(text: str, width: int = PANEL_WIDTH, height: int = 300) -> np.ndarray:
@@ -41,20 +58,29 @@ def _fit(img: np.ndarray, width: int = PANEL_WIDTH) -> tuple[np.ndarray, float]:
 
 
 def draw_detections(rec: CaptureRecord, colors: Any = None, width: int = PANEL_WIDTH) -> np.ndarray:
-    """The photo (RGB) scaled to ``width`` with every detection's box, label and score."""
+    """The photo (RGB) scaled to ``width`` with every detection's box and readable labels.
+
+    Touching boxes of one class share one label (``cardboard box ×19``) and a label that would
+    cover another is left out (see :func:`~console.photo_marks.photo_labels`).
+    """
     img, s = _fit(np.ascontiguousarray(rec.image[..., :3]), width)
+    color_of = colors if colors is not None else label_color
+    scaled = []
     for d in rec.detections:
         x1, y1, x2, y2 = (int(round(v * s)) for v in d.bbox)
-        rgb = colors(d.label) if colors is not None else label_color(d.label)
-        cv2.rectangle(img, (x1, y1), (x2, y2), rgb, 2, cv2.LINE_AA)
-        text = f"{d.label.replace('_', ' ')} {d.score:.2f}"
-        (tw, th), base = cv2.getTextSize(text, cv2.FONT_HERSHEY_SIMPLEX, 0.45, 1)
-        ty = y1 - 4 if y1 - th - 6 >= 0 else y1 + th + 4
-        cv2.rectangle(img, (x1, ty - th - 3), (x1 + tw + 4, ty + base - 1), rgb, -1)
-        lum = 0.299 * rgb[0] + 0.587 * rgb[1] + 0.114 * rgb[2]
-        cv2.putText(img, text, (x1 + 2, ty - 1), cv2.FONT_HERSHEY_SIMPLEX, 0.45,
-                    (0, 0, 0) if lum > 150 else (255, 255, 255), 1, cv2.LINE_AA)
+        cv2.rectangle(img, (x1, y1), (x2, y2), color_of(d.label), 2, cv2.LINE_AA)
+        scaled.append((d.label, float(d.score), (float(x1), float(y1), float(x2), float(y2))))
+    labels, _ = photo_labels(scaled, img.shape[1], img.shape[0])
+    draw_labels(img, labels, color_of)
     return img
+
+
+def depth_with_scale(depth: np.ndarray, width: int = PANEL_WIDTH) -> tuple[np.ndarray, float, float]:
+    """The depth picture with its colour scale in metres on the right, ``width`` px wide in all."""
+    bar_w = 72
+    img, near, far = depth_picture(depth, width - bar_w)
+    bar, _ = depth_colorbar(near, far, img.shape[0], bar_w)
+    return np.ascontiguousarray(np.hstack([img, bar])), near, far
 
 
 def depth_picture(depth: np.ndarray, width: int = PANEL_WIDTH) -> tuple[np.ndarray, float, float]:
@@ -105,20 +131,20 @@ class CaptureView:
         """Display a capture."""
         photo = draw_detections(rec, self._colors)
         if rec.depth is not None:
-            depth, near, far = depth_picture(rec.depth)
-            depth_note = f"depth {near:.1f}–{far:.1f} m (warm = near)"
+            depth, near, far = depth_with_scale(rec.depth)
+            depth_note = f"depth {near:.1f}–{far:.1f} m (warm = near, scale in metres beside it)"
         else:
             depth, depth_note = placeholder("no depth map from this backend"), "no depth map"
         t = rec.camera_pose.translation
         total = rec.timings.get("total", sum(v for k, v in rec.timings.items() if k != "capture"))
         caption = (
-            f"<small><b>{html.escape(rec.id)}</b> · {len(rec.detections)} detections · "
+            f"<small><b>{html.escape(rec.id)}</b> · {plural(len(rec.detections), 'detection')} · "
             f"{html.escape(depth_note)}<br>perception: <b>{html.escape(rec.backend or 'unknown')}</b>"
             f" · {total:.2f} s<br>camera at ({t[0]:.2f}, {t[1]:.2f}, {t[2]:.2f}) m</small>"
         )
         q = rec.camera_pose.quaternion  # x, y, z, w
         intr = rec.intrinsics
-        thumb, _ = _fit(np.ascontiguousarray(rec.image[..., :3]), 320)
+        thumb = frustum_photo(rec.image)
         with self._lock:
             latest = self._session.capture
             if latest is not None and latest is not rec:
@@ -129,8 +155,8 @@ class CaptureView:
             if self._frustum is not None:
                 self._frustum.remove()
             self._frustum = self._server.scene.add_camera_frustum(
-                "/capture/frustum", fov=intr.vfov, aspect=intr.width / intr.height, scale=0.3,
-                color=FRUSTUM_RGB, image=thumb, format="jpeg", jpeg_quality=80,
+                "/capture/frustum", fov=intr.vfov, aspect=intr.width / intr.height, scale=FRUSTUM_SCALE,
+                color=FRUSTUM_RGB, image=thumb, format="png",
                 wxyz=(q[3], q[0], q[1], q[2]), position=t, thickness=0.015, cast_shadow=False,
             )
 

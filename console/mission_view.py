@@ -17,6 +17,7 @@ from planner.mission import Mission, SegmentKind
 
 from .client_notice import tell
 from .paths_view import KIND_RGB
+from .wording import plural
 from .session import MISSION, RUN, RunStatus, Session, SessionError
 
 
@@ -32,20 +33,31 @@ class MissionRunner(Protocol):
     def abort(self) -> None: ...
 
 
+def max_height(segment: Any, floor: float = 0.0) -> float:
+    """Highest waypoint of a segment above the floor at world z = ``floor`` [m]."""
+    return max(float(w[2]) for w in segment.waypoints) - floor
+
+
 def segment_table(mission: Mission, current: int | None = None) -> str:
-    """The mission as a Markdown table (HTML colour chips), the running segment in bold."""
+    """The mission as a Markdown table (HTML colour chips), the running segment in bold.
+
+    A fly segment also says how high it climbs (``max 1.9 m`` above the floor): its two ends
+    alone can hide a climb over a tall obstacle.
+    """
+    floor = float(mission.bounds_min[2])
     rows = ["| # | type | from → to [m] | length |", "|---|---|---|---|"]
     for i, s in enumerate(mission.segments):
         a, b = s.start, s.end
         chip = (f"<span style='display:inline-block;width:0.7em;height:0.7em;border-radius:2px;"
                 f"background:rgb{KIND_RGB[s.kind]};margin-right:0.3em'></span>")
         kind = s.kind.value if s.kind is not SegmentKind.TAKEOFF else "take-off"
+        peak = f", **max {max_height(s, floor):.1f} m**" if s.kind is SegmentKind.FLY else ""
         row = (f"| {i + 1} | {chip}{kind} | ({a[0]:.1f}, {a[1]:.1f}, {a[2]:.1f}) → "
-               f"({b[0]:.1f}, {b[1]:.1f}, {b[2]:.1f}) | {s.length:.2f} m |")
+               f"({b[0]:.1f}, {b[1]:.1f}, {b[2]:.1f}){peak} | {s.length:.2f} m |")
         if current == i:
             row = row.replace(f"| {i + 1} |", f"| ▶ **{i + 1}** |", 1)
         rows.append(row)
-    rows.append(f"\n<small>mission <code>{html.escape(mission.id)}</code>: {len(mission.segments)} segments, "
+    rows.append(f"\n<small>mission <code>{html.escape(mission.id)}</code>: {plural(len(mission.segments), 'segment')}, "
                 f"{mission.length:.2f} m</small>")
     return "\n".join(rows)
 
@@ -93,7 +105,7 @@ class MissionView:
             tell(event.client, "No mission", str(exc), "yellow")
             return
         kinds = " → ".join(mission.kinds())
-        tell(event.client, "Mission built", f"{len(mission.segments)} segments: {kinds}", "green")
+        tell(event.client, "Mission built", f"{plural(len(mission.segments), 'segment')}: {kinds}", "green")
 
     def _on_execute(self, event: Any) -> None:
         mission = self._session.mission

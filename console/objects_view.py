@@ -25,11 +25,14 @@ import viser
 from pipeline.scene import SceneObject
 
 from .client_notice import tell
+from .picking import SELECT_MODIFIER, click_intent
 from .session import SCENE, SELECTION, Session, SessionError
+from .wording import natural_sorted, plural
 
 log = logging.getLogger(__name__)
 
 NONE_CHOICE = "(none)"
+SELECTION_RGB = (0, 200, 255)
 DROP_TOLERANCE_M = 1e-3  # a gizmo released closer than this to where it was grabbed did not move [m]
 DROP_TOLERANCE_RAD = 1e-3  # ... nor turn [rad]
 Vec3 = tuple[float, float, float]
@@ -236,12 +239,16 @@ class ObjectsView:
         oid = obj.id
 
         async def clicked(event: Any) -> None:
-            # async: runs on the event loop before the scene-wide click, so it can claim it
+            # async: runs on the event loop before the scene-wide click, so it can claim it. In goal
+            # mode a plain click is not ours: the scene-wide click makes it a goal through the object
+            if click_intent(self._session.settings.click_to_goal, event.modifier, on_object=True) != "select":
+                return
             if self._on_node_click is not None:
                 self._on_node_click(event.client_id)
             threading.Thread(target=self._select_quietly, args=(oid,), daemon=True).start()
 
         mesh.on_click(clicked)
+        mesh.on_click(modifier=SELECT_MODIFIER)(clicked)
         return [mesh]
 
     def _select_quietly(self, object_id: str) -> None:
@@ -272,10 +279,10 @@ class ObjectsView:
             ws = self._session.workspace
             outside = [o for o in scene.objects if not ws.contains(o.position)]
             self._summary.content = (
-                f"<small>{len(scene.objects)} objects"
+                f"<small>{plural(len(scene.objects), 'object')}"
                 + (f" · <b style='color:#b35900'>{len(outside)} outside the workspace</b> (the planner ignores them)"
                    if outside else "") + "</small>") if scene.objects else ""
-            options = (NONE_CHOICE,) + tuple(sorted(current))
+            options = (NONE_CHOICE,) + tuple(natural_sorted(current))
             if tuple(self._chooser.options) != options:
                 self._chooser.options = options
         self._show_selection()
@@ -294,13 +301,18 @@ class ObjectsView:
             self._place_gizmo(obj)
             if obj is None:
                 self._folder.visible = False
-                if self._chooser.value != NONE_CHOICE and self._chooser.value not in self._drawn:
-                    self._chooser.value = NONE_CHOICE
+                if self._chooser.value != NONE_CHOICE:
+                    self._chooser.value = NONE_CHOICE  # Deselect (or a deletion) clears the list too
                 return
             w, h, l = obj.size
+            # a see-through glow box around the object, with its own bright outline as a child
             self._selection_box = self._server.scene.add_box(
-                "/selection", color=(0, 200, 255), dimensions=(l + 0.08, w + 0.08, h + 0.08), wireframe=True,
+                "/selection", color=SELECTION_RGB, dimensions=(l + 0.1, w + 0.1, h + 0.1), opacity=0.35,
                 wxyz=yaw_wxyz(obj.yaw), position=obj.position, cast_shadow=False, receive_shadow=False,
+            )
+            self._server.scene.add_box(
+                "/selection/outline", color=SELECTION_RGB, dimensions=(l + 0.12, w + 0.12, h + 0.12), wireframe=True,
+                cast_shadow=False, receive_shadow=False,
             )
             self._details.content = describe(obj)
             self._pos.value = tuple(round(v, 3) for v in obj.position)  # type: ignore[assignment]
@@ -399,7 +411,7 @@ class ObjectsView:
     def _on_move(self, event: Any) -> None:
         obj = self._session.selected
         if obj is None:
-            tell(event.client, "Nothing selected", "click an object first", "red")
+            tell(event.client, "Nothing selected", "click an object first (Shift-click in goal mode)", "yellow")
             return
         try:
             notes = self._session.move_object(obj.id, tuple(self._pos.value), math.radians(float(self._yaw.value)))
@@ -411,7 +423,7 @@ class ObjectsView:
     def _on_delete(self, event: Any) -> None:
         obj = self._session.selected
         if obj is None:
-            tell(event.client, "Nothing selected", "click an object first", "red")
+            tell(event.client, "Nothing selected", "click an object first (Shift-click in goal mode)", "yellow")
             return
         try:
             notes = self._session.delete_object(obj.id)
@@ -423,6 +435,16 @@ class ObjectsView:
     def colors(self, label: str) -> tuple[int, int, int]:
         """Display colour of a label (the catalog's, else a stable hashed one)."""
         return self._models.color(label)
+
+    def highlighted(self) -> str | None:
+        """Id of the object drawn highlighted (``None``: no highlight), for tests."""
+        with self._lock:
+            obj = self._session.selected
+            return obj.id if obj is not None and self._selection_box is not None else None
+
+    def chooser_value(self) -> str:
+        """What the "Select object" list shows."""
+        return str(self._chooser.value)
 
     def drawn_ids(self) -> list[str]:
         """Ids of the objects currently drawn (for tests)."""

@@ -1,9 +1,12 @@
 """Goals and paths: click to add a goal, the candidate (red), registered (green) and mission paths.
 
 A click in the 3D view becomes a ray; its hit with the floor (or with the chosen altitude's grid
-layer) is the goal, and the candidate path from the last registered node appears at once. The
-panel holds the goal mode and Register / Discard / Undo / Clear. The built mission is drawn by
-segment type (walk / take-off / fly / land) with a legend. World frame, z up [m].
+layer) is the goal, and the candidate path from the last registered node appears at once. In goal
+mode the click goes through objects (their own click handler stands aside); objects are selected
+in select mode or with Shift held. A goal can also be typed (x, y, z) and the 3D view put in a top
+view. The panel holds the click mode, goal mode and Register / Discard / Undo / Clear. Goals above
+the floor get a drop line to it. The built mission is drawn by segment type (walk / take-off / fly
+/ land) with a legend. World frame, z up [m].
 """
 
 from __future__ import annotations
@@ -20,7 +23,9 @@ import viser
 from planner.mission import Mission, SegmentKind
 
 from .client_notice import tell
+from .picking import SELECT_MODIFIER, click_intent, drop_lines, top_view, typed_goal
 from .session import MISSION, ROUTE, SETTINGS, Session, SessionError
+from .wording import plural
 
 log = logging.getLogger(__name__)
 
@@ -35,6 +40,8 @@ KIND_RGB: dict[SegmentKind, tuple[int, int, int]] = {
 }
 LIFT = 0.025  # draw floor paths this far above the floor [m], clear of the floor grid
 NODE_CLICK_WINDOW = 0.5  # a scene click this soon after an object click belongs to the object [s]
+CLICK_CHOICES = {"add goal": True, "select object": False}  # the "Click" dropdown -> goal mode on/off
+DROP_RGB = (120, 120, 130)
 
 
 def polyline_segments(points: np.ndarray, lift: float = 0.0) -> np.ndarray:
@@ -71,13 +78,21 @@ class PathsView:
         self._handles: dict[str, Any] = {}
         s = session.settings
         gui = server.gui
-        self._click = gui.add_checkbox("Click adds goal", s.click_to_goal,
-                                       hint="A click on the floor (or the altitude's grid layer) plans a candidate path there")
+        self._click = gui.add_dropdown(
+            "Click", tuple(CLICK_CHOICES), initial_value=_click_choice(s.click_to_goal),
+            hint="add goal: a click plans a candidate to the floor (or altitude) point under the cursor, "
+                 f"through any object there · select object: a click selects the object · {SELECT_MODIFIER.capitalize()}"
+                 "-click always selects")
         self._mode = gui.add_dropdown("Goal on", ("ground", "altitude"), initial_value=s.goal_mode,
                                       hint="ground: goals on the floor; altitude: goals in the air at the height below")
         ws = session.workspace
         self._alt = gui.add_number("Altitude [m]", s.altitude, min=ws.resolution, max=ws.max[2] - ws.floor - ws.resolution / 2,
                                    step=0.25, hint="Goal height above the floor in altitude mode [m]")
+        self._typed = gui.add_vector3("Goal x, y, z [m]", tuple(round(v, 2) for v in session.route_snapshot().start),
+                                      step=0.25, hint="World frame [m]; z is the goal height (0 = on the floor)")
+        add = gui.add_button("Add goal", icon=viser.Icon.MAP_PIN, hint="Plan a candidate to the typed point")
+        view = gui.add_button_group("View", ("Top view", "Default view"),
+                                    hint="Top view: look straight down on the whole workspace (easy goal clicks)")
         self._route_md = gui.add_markdown("")
         register = gui.add_button("Register", color="green", icon=viser.Icon.CHECK,
                                   hint="Keep the red candidate: it turns green; the next goal starts from its end")
@@ -87,6 +102,8 @@ class PathsView:
         gui.add_markdown(legend_html())
 
         self._click.on_update(self._on_click_toggle)
+        add.on_click(self._on_typed_goal)
+        view.on_click(lambda e: self.set_view(e.client, str(e.target.value)))
         self._mode.on_update(self._on_mode)
         self._alt.on_update(self._on_mode)
         register.on_click(lambda e: self._act(e, self._session.register, "Registered"))
@@ -104,11 +121,12 @@ class PathsView:
         self._node_clicks[client_id] = time.monotonic()
 
     async def _on_scene_click(self, event: Any) -> None:
-        # async: runs on the event loop after any object's own click handler
+        # async: runs on the event loop after any object's own click handler; registered for plain
+        # clicks only (viser filters modifiers), so Shift-clicks never make goals
         t = self._node_clicks.pop(event.client_id, None)
         if t is not None and time.monotonic() - t < NODE_CLICK_WINDOW:
-            return
-        if not self._session.settings.click_to_goal:
+            return  # an object claimed this click (select mode)
+        if click_intent(self._session.settings.click_to_goal, None, on_object=False) != "goal":
             return
         threading.Thread(target=self.goal_from_click, args=(event.client, event.ray_origin, event.ray_direction),
                          daemon=True).start()
@@ -122,11 +140,44 @@ class PathsView:
             return False
         res = self._session.add_goal(goal)
         if not res.ok:
-            tell(client, "Goal not reachable", res.message, "red", 7.0)
+            tell(client, "Goal not reachable", res.message, "yellow", 8.0)
             return False
         tell(client, "Candidate path",
                    f"to ({goal[0]:.2f}, {goal[1]:.2f}, {goal[2]:.2f}) m: {res.message}. Register to keep it.", "blue", 4.0)
         return True
+
+    def _on_typed_goal(self, event: Any) -> None:
+        threading.Thread(target=self.goal_from_values, args=(event.client, tuple(self._typed.value)), daemon=True).start()
+
+    def goal_from_values(self, client: Any, values: Any) -> bool:
+        """Plan a candidate to a typed ``(x, y, z)`` goal (world [m]); tell ``client`` if it fails."""
+        try:
+            goal = typed_goal(values, self._session.workspace)
+        except SessionError as exc:
+            tell(client, "No goal there", str(exc), "yellow", 7.0)
+            return False
+        res = self._session.add_goal(goal)
+        if not res.ok:
+            tell(client, "Goal not reachable", res.message, "yellow", 8.0)
+            return False
+        tell(client, "Candidate path", f"to ({goal[0]:.2f}, {goal[1]:.2f}, {goal[2]:.2f}) m: {res.message}. "
+             "Register to keep it.", "blue", 4.0)
+        return True
+
+    def set_view(self, client: Any, which: str) -> None:
+        """Put ``client``'s 3D view in the top view (straight down) or back to the default view."""
+        if client is None:
+            return
+        cam = client.camera
+        if which == "Top view":
+            position, look_at, up = top_view(self._session.workspace, float(cam.fov), float(cam.aspect))
+        else:
+            init = self._server.initial_camera
+            position, look_at, up = tuple(init.position), tuple(init.look_at), tuple(init.up)
+        with client.atomic():
+            cam.up_direction = up
+            cam.position = position
+            cam.look_at = look_at
 
     def _act(self, event: Any, action: Any, title: str | None) -> None:
         try:
@@ -139,7 +190,7 @@ class PathsView:
 
     def _on_click_toggle(self, event: Any) -> None:
         if event.client is not None:
-            self._session.set_click_to_goal(bool(self._click.value))
+            self._session.set_click_to_goal(CLICK_CHOICES.get(str(self._click.value), True))
 
     def _on_mode(self, event: Any) -> None:
         if event.client is None:
@@ -161,7 +212,7 @@ class PathsView:
 
     def _sync_settings(self) -> None:
         s = self._session.settings
-        self._click.value = s.click_to_goal
+        self._click.value = _click_choice(s.click_to_goal)
         self._mode.value = s.goal_mode
         self._alt.value = s.altitude
         self._alt.disabled = s.goal_mode != "altitude"
@@ -203,6 +254,9 @@ class PathsView:
             cand = polyline_segments(r.candidate, LIFT) if r.candidate is not None else np.zeros((0, 2, 3))
             self._lines("candidate", cand, CANDIDATE_RGB, 0.045)
             g = r.candidate_goal
+            floor = self._session.workspace.floor
+            drops = drop_lines(list(r.goals) + ([g] if g is not None else []), floor)
+            self._lines("drops", drops, DROP_RGB, 0.015)
             self._put("candidate_goal", None if g is None else lambda: sc.add_icosphere(
                 "/paths/candidate_goal", radius=0.08, color=CANDIDATE_RGB, position=(g[0], g[1], g[2] + LIFT),
                 cast_shadow=False))
@@ -215,13 +269,13 @@ class PathsView:
         parts = [f"Start ({r.start[0]:.2f}, {r.start[1]:.2f}) m"]
         if r.registered:
             total = sum(length(p) for p in r.registered)
-            parts.append(f"<b style='color:rgb{REGISTERED_RGB}'>{len(r.registered)} registered</b> segment(s), {total:.2f} m")
+            parts.append(f"<b style='color:rgb{REGISTERED_RGB}'>{plural(len(r.registered), 'registered segment')}</b>, {total:.2f} m")
         if r.candidate is not None and r.candidate_goal is not None:
             g = r.candidate_goal
             parts.append(f"<b style='color:rgb{CANDIDATE_RGB}'>candidate</b> {length(r.candidate):.2f} m "
                          f"to ({g[0]:.2f}, {g[1]:.2f}, {g[2]:.2f})")
         elif not r.registered:
-            parts.append("click the floor to add a goal")
+            parts.append("click the floor (or type a goal) to add a goal")
         return "<small>" + " · ".join(html.escape(p, quote=False) if "<" not in p else p for p in parts) + "</small>"
 
     def redraw_mission(self) -> None:
@@ -248,6 +302,10 @@ class PathsView:
         """Keys of the path nodes currently drawn (for tests)."""
         with self._lock:
             return sorted(self._handles)
+
+
+def _click_choice(click_to_goal: bool) -> str:
+    return next(k for k, v in CLICK_CHOICES.items() if v == bool(click_to_goal))
 
 
 def _sphere(radius: float) -> tuple[np.ndarray, np.ndarray]:

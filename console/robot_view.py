@@ -18,6 +18,7 @@ import trimesh
 import viser
 
 from .session import ROBOT, RobotSnapshot, Session
+from .wording import mode_text
 
 BODY_RGB = (60, 66, 78)
 ARM_RGB = (110, 118, 130)
@@ -92,7 +93,7 @@ def status_text(r: RobotSnapshot | None, link_name: str) -> str:
     detail = f"<br>{html.escape(r.detail)}" if r.detail else ""
     said = "".join(f"<br><span style='color:{_message_color(t)}'>{html.escape(t)}</span>"
                    for _, t in r.messages[-MESSAGES_SHOWN:])
-    return (f"<small>robot <b>{html.escape(link_name)}</b> · {health} · {html.escape(r.mode)} · {armed} · "
+    return (f"<small>robot <b>{html.escape(link_name)}</b> · {health} · {html.escape(mode_text(r.mode))} · {armed} · "
             f"{battery}{stale}<br>pose ({x:.2f}, {y:.2f}, {z:.2f}) m, yaw {math.degrees(r.pose.yaw):.0f}°"
             f"{detail}{said}</small>")
 
@@ -136,5 +137,5 @@ class RobotView:
             self._frame.position = r.pose.translation
             self._frame.wxyz = (q[3], q[0], q[1], q[2])
             self._frame.visible = True
-            self._label.text = f"robot · {r.mode}" + ("" if r.healthy else " · LINK LOST")
+            self._label.text = f"robot · {mode_text(r.mode)}" + ("" if r.healthy else " · LINK LOST")
             self._status.content = status_text(r, self._link_name)

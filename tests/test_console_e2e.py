@@ -209,7 +209,9 @@ def test_operator_maps_the_room_and_builds_a_mission(console: ConsoleApp, tmp_pa
 
             # --- click an object: its details; delete it -----------------------------------------------------
             obj, opx = _clear_object_pixel(app, client.camera)
+            page.keyboard.down("Shift")  # in goal mode a plain click goes through objects; Shift selects
             page.mouse.click(canvas["x"] + opx[0] * sx, canvas["y"] + opx[1] * sy)
+            page.keyboard.up("Shift")
             assert wait_until(lambda: session.selected is not None, 10), "clicking the object did not select it"
             assert session.selected.id == obj.id
             time.sleep(0.5)
