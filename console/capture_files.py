@@ -68,9 +68,12 @@ def read_capture_files(folder: Path, meta: Mapping[str, Any]) -> CaptureRecord:
             raise ValueError(f"{rel!r} lies outside the session folder")
         return p
 
-    img = cv2.imread(str(inside(meta["photo"])), cv2.IMREAD_COLOR)
-    if img is None:
-        raise ValueError(f"photo {meta['photo']} is missing or unreadable")
+    from pipeline.image_io import ImageError, load_image
+
+    try:  # the one image convention (upright, corrupt data refused), as for every other photo
+        rgb = load_image(inside(meta["photo"]), name=f"photo {meta['photo']}")
+    except ImageError as exc:
+        raise ValueError(f"{exc} (missing or unreadable)") from None
     depth = None
     if meta.get("depth_mm"):
         d = cv2.imread(str(inside(meta["depth_mm"])), cv2.IMREAD_UNCHANGED)
@@ -85,7 +88,7 @@ def read_capture_files(folder: Path, meta: Mapping[str, Any]) -> CaptureRecord:
                            d.get("object_id")) for d in meta.get("detections", []))
     return CaptureRecord(
         id=str(meta["id"]),
-        image=cv2.cvtColor(img, cv2.COLOR_BGR2RGB),
+        image=rgb,
         intrinsics=intr,
         camera_pose=Pose(tuple(cp["translation"]), tuple(cp["quaternion_xyzw"])),  # type: ignore[arg-type]
         robot_pose=Pose(tuple(rp["translation"]), tuple(rp["quaternion_xyzw"])),  # type: ignore[arg-type]

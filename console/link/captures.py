@@ -9,7 +9,16 @@ sits next to ``<name>.json`` holding its intrinsics and, optionally, ground-trut
                   "bbox2d_gt": [x1, y1, x2, y2], "bbox2d_proj": [x1, y1, x2, y2]}, ...]}
 
 ``center_cam`` is in the OpenCV camera frame (x right, y down, z forward) [m]; ``size`` is
-``(w, h, l)`` [m]. An ``index.json`` listing ``{"json": "<relative path>"}`` entries fixes the
+``(w, h, l)`` [m]. ``width`` and ``height`` are REQUIRED: they are the image size ``K`` is for, so a
+photo resized after calibration is refused instead of being mapped 1/scale too far. Optional
+``gravity_cam`` (unit gravity-down vector, camera frame) and ``camera_height`` [m] (camera centre
+above the floor) give the camera's pose for that photo (the bench format); the console then uses
+it instead of the robot's mount (:attr:`FolderPhoto.mount`).
+
+Photos are loaded by :func:`pipeline.image_io.read_image`: EXIF orientation applied (logged when a
+photo has the tag), ``K`` describes the upright image, truncated or corrupt JPEGs are refused.
+Every entry's JSON and image size are checked when the folder is opened, so a bad folder is refused
+at start, naming the file and the field. An ``index.json`` listing ``{"json": "<relative path>"}`` entries fixes the
 order; without it every ``*.json`` with a matching image, in sorted order, is used (sub-folders
 included). Photos are served in order and the sequence wraps around.
 """
@@ -17,6 +26,7 @@ included). Photos are served in order and the sequence wraps around.
 from __future__ import annotations
 
 import json
+import logging
 import math
 import threading
 from dataclasses import dataclass
@@ -25,12 +35,15 @@ from typing import Any
 
 import numpy as np
 
-from pipeline.geometry import CameraError, Intrinsics
+from pipeline.geometry import CameraError, CameraMount, Intrinsics
+from pipeline.image_io import ImageError, read_image, upright_size
 from pipeline.scene import SceneObject, Source
 
 from .base import GroundTruth, LinkError, VisibleObject
 
 IMAGE_SUFFIXES = (".jpg", ".jpeg", ".png")
+
+log = logging.getLogger(__name__)
 
 
 class CapturesError(LinkError):
@@ -46,12 +59,85 @@ class FolderPhoto:
         image: RGB, H x W x 3 uint8.
         intrinsics: Intrinsics of ``image`` [px].
         ground_truth: Annotated objects (camera frame) and their 2D boxes, if the file has any.
+        mount: The camera's pose for this photo from its ``gravity_cam`` and ``camera_height``
+            (robot body frame, robot standing level on the floor), or ``None`` to use the robot's.
+        note: What was done to the image (EXIF orientation applied), or ``None``.
     """
 
     name: str
     image: np.ndarray
     intrinsics: Intrinsics
     ground_truth: GroundTruth | None
+    mount: CameraMount | None = None
+    note: str | None = None
+
+
+def read_json(path: Path) -> Any:
+    """The JSON value of ``path``; :class:`CapturesError` naming the file when it cannot be had."""
+    try:
+        return json.loads(path.read_text(encoding="utf-8"))
+    except FileNotFoundError:
+        raise CapturesError(f"{path}: missing") from None
+    except RecursionError:
+        raise CapturesError(f"{path}: JSON nested too deeply") from None
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
+        raise CapturesError(f"{path}: not readable JSON: {exc}") from None
+
+
+def mount_from_gravity(gravity_cam: tuple[float, ...], camera_height: float,
+                       base: CameraMount | None = None) -> CameraMount:
+    """The camera mount that sees gravity as ``gravity_cam`` (unit down vector, OpenCV camera frame)
+    from ``camera_height`` [m] above the floor, for a robot standing level on the floor.
+
+    Pitch (down positive) and roll come from the gravity vector; the yaw and the forward/left
+    offsets are those of ``base`` (the robot's own mount), the height is ``camera_height``.
+    """
+    gx, gy, gz = gravity_cam
+    pitch = math.atan2(gz, math.hypot(gx, gy))
+    roll = math.atan2(gx, gy)
+    b = base or CameraMount()
+    return CameraMount((b.position[0], b.position[1], float(camera_height)), pitch, b.yaw, roll)
+
+
+def _photo_mount(meta: dict[str, Any], where: Path) -> CameraMount | None:
+    g, h = meta.get("gravity_cam"), meta.get("camera_height")
+    if g is None and h is None:
+        return None
+    if g is None or h is None:
+        raise CapturesError(f"{where}: 'gravity_cam' and 'camera_height' go together (the camera's pose "
+                            "for this photo); give both or neither")
+    gv = _vec(g, 3, f"{where}: gravity_cam")
+    n = math.sqrt(sum(v * v for v in gv))
+    if abs(n - 1.0) > 0.05:
+        raise CapturesError(f"{where}: gravity_cam must be a unit vector (camera frame), got length {n:.3g}")
+    if isinstance(h, bool) or not isinstance(h, (int, float)) or not math.isfinite(h) or not 0.0 < h <= 10.0:
+        raise CapturesError(f"{where}: camera_height must be a number within 0..10 m, got {h!r}")
+    return mount_from_gravity(tuple(v / n for v in gv), float(h))
+
+
+def _intrinsics(meta: dict[str, Any], where: Path, size: tuple[int, int]) -> Intrinsics:
+    """Intrinsics of the JSON, checked against the (upright) image ``size`` = (w, h) [px]."""
+    K = meta.get("K")
+    if not (isinstance(K, list) and len(K) == 3 and all(isinstance(r, list) and len(r) == 3 for r in K)
+            and all(isinstance(v, (int, float)) and not isinstance(v, bool) for r in K for v in r)):
+        raise CapturesError(f"{where}: 'K' must be a 3x3 list of numbers (the camera matrix [px])")
+    for key in ("width", "height"):
+        v = meta.get(key)
+        if v is None:
+            raise CapturesError(
+                f"{where}: '{key}' is required: 'width' and 'height' give the image size K is for "
+                f"(this image is {size[0]}x{size[1]}; a resized photo needs K scaled by the same factor)")
+        if isinstance(v, bool) or not isinstance(v, int) or v <= 0:
+            raise CapturesError(f"{where}: '{key}' must be a whole number of pixels > 0, got {v!r}")
+    dist = meta.get("dist", [])
+    if not isinstance(dist, list) or not all(isinstance(d, (int, float)) and not isinstance(d, bool) for d in dist):
+        raise CapturesError(f"{where}: 'dist' must be a list of numbers")
+    try:
+        intr = Intrinsics.from_K(K, meta["width"], meta["height"], [float(d) for d in dist])
+        intr.check_image(*size)
+    except (CameraError, TypeError, ValueError) as exc:
+        raise CapturesError(f"{where}: {exc}") from None
+    return intr
 
 
 def _find_image(meta_path: Path, meta: dict[str, Any]) -> Path:
@@ -91,14 +177,36 @@ class CapturesFolder:
                 "(see the --captures format in the README)")
         self._next = 0
         self._lock = threading.Lock()
+        self.check()
+
+    def _meta(self, i: int) -> tuple[Path, dict[str, Any], Path]:
+        meta_path = self.entries[i]
+        if not meta_path.is_file():
+            raise CapturesError(f"{meta_path}: listed in index.json but missing")
+        meta = read_json(meta_path)
+        if not isinstance(meta, dict):
+            raise CapturesError(f"{meta_path}: must hold a JSON object")
+        return meta_path, meta, _find_image(meta_path, meta)
+
+    def check(self) -> None:
+        """Check every entry without decoding the photos: its JSON (``K``, ``width``, ``height``,
+        the optional camera pose) against the image's upright size read from its header.
+
+        Raises:
+            CapturesError: The first bad entry, naming the file and the field.
+        """
+        for i in range(len(self.entries)):
+            meta_path, meta, img_path = self._meta(i)
+            size = upright_size(img_path)
+            if size is None:
+                continue  # unreadable header: load() decodes and names the problem
+            _intrinsics(meta, meta_path, size)
+            _photo_mount(meta, meta_path)
 
     def _list(self) -> list[Path]:
         index = self.folder / "index.json"
         if index.is_file():
-            try:
-                items = json.loads(index.read_text(encoding="utf-8"))
-            except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
-                raise CapturesError(f"{index}: not readable JSON: {exc}") from None
+            items = read_json(index)
             if not isinstance(items, list):
                 raise CapturesError(f"{index}: must be a list of {{'json': path}} entries")
             out = []
@@ -116,7 +224,7 @@ class CapturesFolder:
             return True
         try:
             meta = json.loads(p.read_text(encoding="utf-8"))
-        except (OSError, UnicodeDecodeError, json.JSONDecodeError):
+        except (OSError, UnicodeDecodeError, json.JSONDecodeError, RecursionError):
             return False
         return isinstance(meta, dict) and isinstance(meta.get("image"), str) and (p.parent / meta["image"]).is_file()
 
@@ -131,34 +239,24 @@ class CapturesFolder:
         return self.load(i)
 
     def load(self, i: int) -> FolderPhoto:
-        """Photo number ``i`` (in folder order)."""
-        import cv2
+        """Photo number ``i`` (in folder order), upright.
 
-        meta_path = self.entries[i]
+        Raises:
+            CapturesError: Unreadable JSON or image (corrupt, truncated), intrinsics that do not fit
+                the image, or a bad per-photo camera pose; the message names the file.
+        """
+        meta_path, meta, img_path = self._meta(i)
         try:
-            meta = json.loads(meta_path.read_text(encoding="utf-8"))
-        except FileNotFoundError:
-            raise CapturesError(f"{meta_path}: listed in index.json but missing") from None
-        except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
-            raise CapturesError(f"{meta_path}: not readable JSON: {exc}") from None
-        if not isinstance(meta, dict):
-            raise CapturesError(f"{meta_path}: must hold a JSON object")
-        img_path = _find_image(meta_path, meta)
-        bgr = cv2.imread(str(img_path), cv2.IMREAD_COLOR)
-        if bgr is None:
-            raise CapturesError(f"{img_path}: not a readable image")
-        image = np.ascontiguousarray(bgr[:, :, ::-1])
-        h, w = image.shape[:2]
-        K = meta.get("K")
-        if not (isinstance(K, list) and len(K) == 3 and all(isinstance(r, list) and len(r) == 3 for r in K)):
-            raise CapturesError(f"{meta_path}: 'K' must be a 3x3 list of numbers (the camera matrix [px])")
-        try:
-            intr = Intrinsics.from_K(K, int(meta.get("width", w)), int(meta.get("height", h)))
-            intr.check_image(w, h)
-        except (CameraError, TypeError, ValueError) as exc:
-            raise CapturesError(f"{meta_path}: {exc}") from None
+            loaded = read_image(img_path)
+        except ImageError as exc:
+            raise CapturesError(str(exc)) from None
+        if loaded.note:
+            log.info("%s", loaded.note)
+        h, w = loaded.image.shape[:2]
+        intr = _intrinsics(meta, meta_path, (w, h))
         name = str(img_path.relative_to(self.folder))
-        return FolderPhoto(name, image, intr, self._truth(meta, meta_path, name))
+        return FolderPhoto(name, loaded.image, intr, self._truth(meta, meta_path, name),
+                           _photo_mount(meta, meta_path), loaded.note)
 
     @staticmethod
     def _truth(meta: dict[str, Any], where: Path, name: str) -> GroundTruth | None:
