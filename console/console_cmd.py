@@ -122,11 +122,16 @@ def add_console_parser(subparsers: argparse._SubParsersAction) -> argparse.Argum
 
 
 def cmd_console(args: argparse.Namespace) -> int:
-    """Run the console until Ctrl-C."""
+    """Run the console until Ctrl-C.
+
+    The session folder is locked first (:class:`console.session_lock.SessionLock`): a second console
+    on the same folder stops here, naming the PID of the one running, before anything is read.
+    """
     from console.cli import CliError
 
     from .app import ConsoleApp, ConsoleConfig
     from .session import SessionError
+    from .session_lock import SessionLock
 
     logging.basicConfig(level=logging.INFO, format="%(asctime)s %(levelname)s %(name)s: %(message)s",
                         datefmt="%H:%M:%S")
@@ -142,18 +147,25 @@ def cmd_console(args: argparse.Namespace) -> int:
         resolution=args.resolution, margin=args.margin, captures=args.captures,
         failsafe_after=args.failsafe_after, failsafe_hold=args.failsafe_hold, link_options=link_options(args),
     )
-    app = ConsoleApp(config)
     try:
-        app.start()
+        lock = SessionLock(args.session).acquire()
     except SessionError as exc:
         raise CliError(str(exc)) from None
-    except Exception as exc:
-        app.stop()
-        from .link.base import LinkError
+    try:
+        app = ConsoleApp(config)
+        try:
+            app.start()
+        except Exception as exc:
+            app.stop()
+            from .link.base import LinkError
 
-        if isinstance(exc, (LinkError, OSError, ValueError)):
-            raise CliError(f"cannot start the console: {exc}") from None
-        raise
-    print(f"MorphoNavi console: open {app.url} in a browser (Ctrl-C to stop)", flush=True)
-    app.serve_forever()
+            if isinstance(exc, SessionError):
+                raise CliError(str(exc)) from None
+            if isinstance(exc, (LinkError, OSError, ValueError)):
+                raise CliError(f"cannot start the console: {exc}") from None
+            raise
+        print(f"MorphoNavi console: open {app.url} in a browser (Ctrl-C to stop)", flush=True)
+        app.serve_forever()
+    finally:
+        lock.release()
     return 0

@@ -26,7 +26,7 @@ from pipeline.scene import SceneObject
 
 from .client_notice import tell
 from .picking import SELECT_MODIFIER, click_intent
-from .session import SCENE, SELECTION, Session, SessionError
+from .session import CAPTURE, SCENE, SELECTION, Session, SessionError
 from .wording import natural_sorted, plural
 
 log = logging.getLogger(__name__)
@@ -199,6 +199,9 @@ class ObjectsView:
         self._summary = server.gui.add_markdown("")
         self._chooser = server.gui.add_dropdown("Select object", (NONE_CHOICE,), hint="Or click an object in the 3D view")
         self._chooser.on_update(self._on_choose)
+        self._undo = server.gui.add_button("Undo", icon=viser.Icon.ARROW_BACK_UP, color="gray", disabled=True,
+                                           hint="Undo the last spawn, move, delete, capture or load")
+        self._undo.on_click(self._on_undo)
         with server.gui.add_folder("Selected object", visible=False) as folder:
             self._folder = folder
             self._details = server.gui.add_markdown("")
@@ -220,6 +223,10 @@ class ObjectsView:
 
     # --- drawing --------------------------------------------------------------------------------
     def _on_event(self, topic: str, _payload: Any) -> None:
+        if topic in (SCENE, CAPTURE):
+            what = self._session.undo_label
+            self._undo.disabled = what is None
+            self._undo.label = "Undo" if what is None else f"Undo {what}"[:40]
         if topic == SCENE:
             self.redraw()
         elif topic == SELECTION:
@@ -419,6 +426,12 @@ class ObjectsView:
             tell(event.client, "Cannot move", str(exc), "red")
             return
         tell(event.client, f"Moved {obj.label}", "; ".join(notes) or "grid rebuilt", color="blue")
+
+    def _on_undo(self, event: Any) -> None:
+        try:
+            tell(event.client, "Undone", self._session.undo_edit().removeprefix("undone: "), "blue")
+        except SessionError as exc:
+            tell(event.client, "Cannot undo", str(exc), "red")
 
     def _on_delete(self, event: Any) -> None:
         obj = self._session.selected

@@ -5,6 +5,12 @@ each ``*.json`` file is read once per modification (its ``mtime`` and size), aft
 still for ``settle`` seconds so a file being written is not read half-way. A malformed file is
 reported once (naming the bad field) and ignored until it changes again.
 
+Limits: a file larger than ``max_bytes`` is refused from its size alone (it is never read), and
+one with more than ``max_objects`` objects is refused before its objects are checked; both are
+reported like a malformed file. Reading and checking run on the watcher's thread, before
+``on_scene`` is called, so they never hold the session's lock; the session then refuses
+implausible objects (:meth:`console.session.Session.spawn`).
+
 Objects may be given in the ``world``, ``robot`` or ``camera`` frame (see :mod:`pipeline.scene`);
 robot- and camera-frame objects are moved into the world frame with the pose of the capture they
 name (``source.capture``), else with the robot's current pose.
@@ -20,10 +26,18 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Callable
 
+import json
+
 import numpy as np
 
 from pipeline.geometry import CameraMount, Pose, camera_pose_in_world
-from pipeline.scene import Capture, Scene, SceneError, SceneObject
+from pipeline.scene import Capture, Scene, SceneError, SceneObject, scene_from_dict
+
+MAX_FILE_BYTES = 5_000_000
+"""Largest scene file read from the watched folder [bytes] (a room's scene is a few kB)."""
+
+MAX_FILE_OBJECTS = 2_000
+"""Most objects one watched scene file may hold."""
 
 log = logging.getLogger(__name__)
 
@@ -127,6 +141,8 @@ class SceneWatcher:
         interval: Seconds between polls.
         settle: A file must be unmodified this long [s] before it is read.
         spawn_existing: Whether files already there when watching starts are spawned too.
+        max_bytes: Larger files are refused unread [bytes].
+        max_objects: Files with more objects are refused.
     """
 
     def __init__(
@@ -137,6 +153,8 @@ class SceneWatcher:
         interval: float = 1.0,
         settle: float = 0.3,
         spawn_existing: bool = True,
+        max_bytes: int = MAX_FILE_BYTES,
+        max_objects: int = MAX_FILE_OBJECTS,
     ) -> None:
         self.folder = Path(folder).expanduser().resolve()
         self.folder.mkdir(parents=True, exist_ok=True)
@@ -144,6 +162,8 @@ class SceneWatcher:
         self._on_error = on_error
         self._interval = interval
         self._settle = settle
+        self._max_bytes = max_bytes
+        self._max_objects = max_objects
         self._seen: dict[str, _Seen] = {}
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
@@ -181,7 +201,7 @@ class SceneWatcher:
             self._seen[path.name] = sig
             done.append(path.name)
             try:
-                scene = Scene.load(path)
+                scene = self._read(path, sig.size)
             except SceneError as exc:
                 self._on_error(path.name, str(exc))
                 continue
@@ -193,6 +213,27 @@ class SceneWatcher:
             except (SceneError, FrameError, ValueError) as exc:
                 self._on_error(path.name, str(exc))
         return done
+
+    def _read(self, path: Path, size: int) -> Scene:
+        """Read and check one file within the limits; raises :class:`SceneError` saying why not."""
+        if size > self._max_bytes:
+            raise SceneError("", f"{size / 1e6:.1f} MB is over the {self._max_bytes / 1e6:g} MB limit for a "
+                                 "scene file: not read")
+        try:
+            text = path.read_text(encoding="utf-8")
+        except (OSError, UnicodeDecodeError) as exc:
+            raise SceneError("", f"cannot read the file: {exc}") from None
+        if len(text.encode("utf-8")) > self._max_bytes:  # grew since it was listed
+            raise SceneError("", f"over the {self._max_bytes / 1e6:g} MB limit for a scene file: not read")
+        try:
+            data = json.loads(text)
+        except json.JSONDecodeError as exc:
+            raise SceneError("", f"not valid JSON (line {exc.lineno}, column {exc.colno}): {exc.msg}") from None
+        objs = data.get("objects") if isinstance(data, dict) else None
+        if isinstance(objs, list) and len(objs) > self._max_objects:
+            raise SceneError("objects", f"{len(objs)} objects is over the limit of {self._max_objects} "
+                                        "for one scene file: nothing was added")
+        return scene_from_dict(data)
 
     def start(self) -> None:
         """Poll in a daemon thread until :meth:`stop`."""

@@ -463,3 +463,17 @@ class Persistence:
                     notes.append(f"the last capture could not be restored: {exc}")
             self._save_locked()
         return notes
+
+    def status_text(self: "Session") -> tuple[str, bool]:
+        """What the page says about saving and the last restore, and whether it is a warning."""
+        with self._lock:
+            err, problems, auto = self._last_save_error, list(self._restore_problems), self._autosave
+        if err is not None:
+            parts = [f"Changes are NOT being saved: {err}. A restart will lose them."]
+        elif auto:
+            parts = ["The session is saved after every change and restored at start."]
+        else:
+            parts = ["Changes are not saved automatically (autosave off)."]
+        if problems:
+            parts.append("The last session was restored in part: " + "; ".join(problems) + ".")
+        return " ".join(parts), bool(err is not None or problems)
