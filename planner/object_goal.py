@@ -1,0 +1,262 @@
+"""Goals by object: where to stand beside an object, and whether the robot can get there.
+
+Everything is in the world frame (z up) [m]. An object is reached by standing on the floor
+beside it: the **approach cell** is the passable ground-layer cell (``k = 0``, finite cost)
+whose centre is nearest to the object's footprint (its oriented box seen from above), at most
+:data:`APPROACH_MAX` away, with a clear straight line to the footprint's nearest point in at
+least one layer the object spans (no other object's cell in between: the robot reaches over
+nothing, e.g. not across a wall around the object, but it may stand beside a table to reach the
+box on it). Ties go to the cell nearest the start, then to the lowest cell index,
+so the choice is deterministic.
+
+Reachability from a start point, with the Aerial-Ground A*'s own rules:
+
+- ``walk``: an approach cell lies in the start's ground component (ground cells joined through
+  faces; with ``no_corner_cutting`` a diagonal move needs both cells it sweeps past passable, so
+  face-connectivity is exactly what the A* can walk);
+- ``fly``: no approach cell can be walked to, but one lies in the start's 3D component of
+  passable cells (the robot takes off, flies over and lands on free floor, then walks). The
+  approach cell is then a *landing spot*: free floor (not within the margin of an obstacle)
+  with a passable take-off cell above, if one lies within :data:`APPROACH_MAX`; else any
+  passable floor cell (the A* lands where it can and walks the rest);
+- ``none``: no approach cell is connected to the start at all (or none exists within
+  :data:`APPROACH_MAX`).
+
+The chosen approach cell is then planned with the A* (:meth:`planner.route.Route.plan`), which
+gives the path cost and, for a flight, the landing spot of the resulting mission.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from dataclasses import dataclass
+from typing import Sequence
+
+import numpy as np
+from scipy import ndimage
+
+from pipeline.scene import Scene, SceneObject
+
+from .grid import CellState, PlanningGrid
+from .mission import MissionError, SegmentKind, mission_from_cells
+from .route import Route
+
+APPROACH_MAX = 1.0
+"""Farthest an approach cell's centre may be from the object's footprint [m]."""
+
+Vec3 = tuple[float, float, float]
+
+
+class ObjectGoalError(ValueError):
+    """No object matches a name, or the start cannot be used."""
+
+
+@dataclass(frozen=True)
+class Approach:
+    """How the robot gets beside one object.
+
+    Attributes:
+        object_id: The object.
+        mode: ``walk``, ``fly``, ``none`` or ``unknown`` (the start itself is unusable).
+        goal: The approach point on the floor (world [m]), ``None`` when unreachable.
+        gap: Distance from the approach point to the object's footprint [m].
+        cost: A* path cost from the start [cost·m] (``inf`` when unreachable).
+        planned: Motions of the A* path (``walk`` or ``walk+fly``): the cheapest path may fly even
+            when walking is possible.
+        landing: The landing spot on the floor (world [m]) when the A* path flies, else ``None``.
+        reason: Why the object is unreachable, empty otherwise.
+    """
+
+    object_id: str
+    mode: str
+    goal: Vec3 | None = None
+    gap: float = math.inf
+    cost: float = math.inf
+    planned: str = ""
+    landing: Vec3 | None = None
+    reason: str = ""
+
+
+def footprint(obj: SceneObject) -> np.ndarray:
+    """The four corners ``[4, 2]`` of an object's footprint (world x, y [m]), counter-clockwise."""
+    w, _, l = obj.size
+    c, s = math.cos(obj.yaw), math.sin(obj.yaw)
+    ax = np.array([c, s]) * l / 2  # length axis
+    ay = np.array([-s, c]) * w / 2  # width axis
+    ctr = np.array(obj.position[:2], dtype=np.float64)
+    return np.array([ctr + ax + ay, ctr - ax + ay, ctr - ax - ay, ctr + ax - ay])
+
+
+def footprint_distance(obj: SceneObject, xy: np.ndarray) -> np.ndarray:
+    """Distance [m] from points ``xy [N, 2]`` (world) to an object's footprint rectangle (0 inside)."""
+    w, _, l = obj.size
+    c, s = math.cos(obj.yaw), math.sin(obj.yaw)
+    d = np.asarray(xy, dtype=np.float64).reshape(-1, 2) - np.asarray(obj.position[:2])
+    along = np.abs(c * d[:, 0] + s * d[:, 1]) - l / 2
+    across = np.abs(-s * d[:, 0] + c * d[:, 1]) - w / 2
+    return np.hypot(np.maximum(along, 0.0), np.maximum(across, 0.0))
+
+
+def _norm(text: str) -> str:
+    return re.sub(r"[\s_\-]+", " ", text.strip().lower())
+
+
+def find_object(scene: Scene, name: str, near: Sequence[float] | None = None) -> SceneObject:
+    """The object a person names: an id (exact, then case-insensitive) or a label.
+
+    Labels match with spaces, ``_`` and ``-`` treated alike (``robot dog`` = ``robot_dog``); when
+    several objects share the label, the one nearest ``near`` (world [m], horizontal) wins, else
+    the first by id. Raises :class:`ObjectGoalError` listing what the scene holds.
+    """
+    text = name.strip()
+    if not text:
+        raise ObjectGoalError("object name is empty")
+    for o in scene.objects:
+        if o.id == text:
+            return o
+    for o in scene.objects:
+        if o.id.lower() == text.lower():
+            return o
+    want = _norm(text)
+    hits = [o for o in scene.objects if _norm(o.label) == want]
+    if not hits and want.endswith("s"):
+        hits = [o for o in scene.objects if _norm(o.label) == want[:-1]]
+    if not hits:
+        labels = sorted({o.label for o in scene.objects})
+        known = ", ".join(labels[:20]) + (" ..." if len(labels) > 20 else "")
+        raise ObjectGoalError(f"no object with id or label {name!r} in the scene"
+                              + (f" (labels: {known})" if labels else " (the scene is empty)"))
+    if near is not None:
+        return min(hits, key=lambda o: (math.dist(o.position[:2], near[:2]), o.id))
+    return min(hits, key=lambda o: o.id)
+
+
+class Reachability:
+    """Reachability of objects from one start on one grid (components computed once).
+
+    Args:
+        grid: The planning grid (world frame).
+        start: Where the robot is (world [m]); on the floor or in the air.
+        route: A route on ``grid`` whose cost weights and A* are used (default: a new one).
+    """
+
+    def __init__(self, grid: PlanningGrid, start: Sequence[float], route: Route | None = None) -> None:
+        self.grid = grid
+        self.route = route if route is not None else Route(grid, start)
+        self.start: Vec3 = (float(start[0]), float(start[1]), float(start[2]))
+        cost = self.route.cost_array
+        passable = np.isfinite(cost)
+        conn = 1 if self.route.no_corner_cutting else None
+        self._ground_ok = passable[:, :, 0]
+        s_cell, why = self.route.check_point(self.start, "robot")
+        self.start_problem = why
+        self._walk = np.zeros_like(self._ground_ok)
+        self._all = np.zeros_like(passable)
+        self._landable = np.zeros_like(self._ground_ok)
+        if s_cell is None:
+            return
+        lab3, _ = ndimage.label(passable, ndimage.generate_binary_structure(3, conn or 3))
+        self._all = lab3 == lab3[s_cell]
+        if s_cell[2] == 0:
+            lab2, _ = ndimage.label(self._ground_ok, ndimage.generate_binary_structure(2, conn or 2))
+            self._walk = lab2 == lab2[s_cell[0], s_cell[1]]
+        if passable.shape[2] > 1:  # free floor with a passable take-off cell above, joined to the robot
+            self._landable = (grid.state[:, :, 0] == CellState.FREE) & self._all[:, :, 0] & self._all[:, :, 1]
+        ws = grid.workspace
+        xs, ys, _ = ws.axes()
+        self._xy = np.stack(np.meshgrid(xs, ys, indexing="ij"), axis=-1)  # [nx, ny, 2]
+
+    def approach(self, obj: SceneObject, plan: bool = True) -> Approach:
+        """Where to stand beside ``obj`` and how to get there (see the module docstring)."""
+        if self.start_problem:
+            return Approach(obj.id, "unknown", reason=self.start_problem)
+        ws = self.grid.workspace
+        for mode, cand in (("walk", self._walk & self._ground_ok), ("fly", self._landable),
+                           ("fly", self._all[:, :, 0] & self._ground_ok)):
+            if not cand.any():
+                continue
+            idx = np.argwhere(cand)
+            pts = self._xy[idx[:, 0], idx[:, 1]]
+            gap = footprint_distance(obj, pts)
+            near = gap <= APPROACH_MAX + 1e-9
+            if not near.any():
+                continue
+            idx, pts, gap = idx[near], pts[near], gap[near]
+            to_start = np.hypot(pts[:, 0] - self.start[0], pts[:, 1] - self.start[1])
+            order = np.lexsort((idx[:, 1], idx[:, 0], np.round(to_start, 6), np.round(gap, 6)))
+            best = next((int(b) for b in order if self._in_reach(obj, pts[b])), None)
+            if best is None:
+                continue
+            goal = (float(pts[best, 0]), float(pts[best, 1]), float(ws.floor))
+            if not plan:
+                return Approach(obj.id, mode, goal, float(gap[best]))
+            return self._planned(obj.id, mode, goal, float(gap[best]))
+        if not self._all[:, :, 0].any() and not self._walk.any():
+            reason = "the robot's position is cut off from the floor"
+        else:
+            reason = (f"no floor within {APPROACH_MAX:.1f} m of it can be reached by walking or by flying "
+                      "(closed in by obstacles)")
+        return Approach(obj.id, "none", reason=reason)
+
+    def _in_reach(self, obj: SceneObject, xy: np.ndarray) -> bool:
+        """Whether the straight line from ``xy`` (world [m]) to the nearest point of ``obj``'s
+        footprint is clear of other objects' cells in at least one layer the object spans."""
+        ws, grid = self.grid.workspace, self.grid
+        w, _, l = obj.size
+        c, s = math.cos(obj.yaw), math.sin(obj.yaw)
+        d = xy - np.asarray(obj.position[:2])
+        along = float(np.clip(c * d[0] + s * d[1], -l / 2, l / 2))
+        across = float(np.clip(-s * d[0] + c * d[1], -w / 2, w / 2))
+        target = np.asarray(obj.position[:2]) + along * np.array([c, s]) + across * np.array([-s, c])
+        n = max(2, int(math.ceil(float(np.linalg.norm(target - xy)) / (ws.resolution / 4))) + 1)
+        line = xy[None, :] + np.linspace(0.0, 1.0, n)[:, None] * (target - xy)[None, :]
+        shape = grid.state.shape
+        ij = np.floor((line - np.asarray(ws.min[:2])) / ws.resolution).astype(np.int64)
+        ij = np.clip(ij, 0, np.array(shape[:2]) - 1)
+        half = ws.resolution / 2
+        xs, ys, zs = ws.axes()
+        dx, dy = xs[ij[:, 0]] - obj.position[0], ys[ij[:, 1]] - obj.position[1]
+        own_xy = ((np.abs(c * dx + s * dy) < l / 2 + half) & (np.abs(-s * dx + c * dy) < w / 2 + half))
+        lo = obj.position[2] - obj.size[1] / 2
+        k0 = int(np.clip(math.floor((lo - ws.floor) / ws.resolution), 0, shape[2] - 1))
+        k1 = int(np.clip(math.floor((lo + obj.size[1] - ws.floor) / ws.resolution - 1e-9), k0, shape[2] - 1))
+        for k in range(k0, k1 + 1):
+            st = grid.state[ij[:, 0], ij[:, 1], k]
+            own = own_xy & (abs(zs[k] - obj.position[2]) < obj.size[1] / 2 + half)  # the cells box_cells gives it
+            other = (st == CellState.OCCUPIED) & ~own
+            if not other.any():
+                return True
+        return False
+
+    def _planned(self, oid: str, mode: str, goal: Vec3, gap: float) -> Approach:
+        res = self.route.plan(self.start, goal)
+        if not res.ok:  # components say yes; the A* disagrees only on a corner case: say so
+            return Approach(oid, "none", reason=res.message)
+        flies = bool(np.any(res.cells[:, 2] > 0))
+        landing: Vec3 | None = None
+        if flies:
+            try:
+                lands = [s for s in mission_from_cells(res.cells, self.grid).segments if s.kind is SegmentKind.LAND]
+                landing = tuple(float(v) for v in lands[-1].spot) if lands else None  # type: ignore[assignment]
+            except MissionError:
+                landing = None
+        return Approach(oid, mode, goal, gap, float(res.cost), "walk+fly" if flies else "walk", landing)
+
+
+def goal_beside(scene: Scene, grid: PlanningGrid, name: str, start: Sequence[float],
+                route: Route | None = None) -> tuple[SceneObject, Approach]:
+    """The object ``name`` (id or label) and the approach goal beside it, from ``start`` (world [m]).
+
+    Raises :class:`ObjectGoalError` when nothing matches, or the object cannot be reached (the
+    message says why).
+    """
+    obj = find_object(scene, name, near=start)
+    app = Reachability(grid, start, route).approach(obj)
+    if app.goal is None:
+        raise ObjectGoalError(f"{obj.label} {obj.id!r} cannot be reached: {app.reason}")
+    return obj, app
+
+
+__all__ = ["APPROACH_MAX", "Approach", "ObjectGoalError", "Reachability", "find_object", "footprint",
+           "footprint_distance", "goal_beside"]

@@ -1,0 +1,475 @@
+"""Scene graph: objects, what they stand on, how they relate, groups and reachability.
+
+Built from a world-frame :class:`~pipeline.scene.Scene` and, when given, the robot pose
+(``world <- robot``: position [m] and yaw [rad] about +z, the robot's x axis forward) and the
+planning grid. The result is a JSON-ready dict (schema :data:`GRAPH_SCHEMA_VERSION`, see
+:mod:`planner.scene_graph_schema`), for people (through :mod:`planner.scene_summary`) and for
+language models.
+
+Deterministic rules and their thresholds (all module constants):
+
+- **Support**: an object stands on the floor when its bottom is within :data:`SUPPORT_TOL` of the
+  floor; else on the object whose top is within :data:`SUPPORT_TOL` of its bottom and whose
+  footprint covers at least :data:`SUPPORT_OVERLAP` of its own (the highest such top, then the
+  largest overlap); else it is unsupported (it seems to float: an uncertainty).
+  ``A on_top_of B`` and ``B under A`` follow from it.
+- **next_to** (symmetric, listed once): footprints at most :data:`NEXT_TO_GAP` apart
+  horizontally, their height ranges overlapping, and neither standing on the other.
+- **As seen from the robot** (only with a robot pose): each object's footprint spans an interval
+  of bearings. ``A behind B``: the intervals overlap by at least :data:`BEHIND_OVERLAP` of the
+  narrower one, A's centre is at least :data:`BEHIND_DEPTH` farther and its nearest corner farther
+  than B's; ``B in_front_of A`` is the inverse. ``A left_of B``: the intervals do not overlap,
+  A's lies to the left, and the footprints are at most :data:`SIDE_GAP` apart (``B right_of A``).
+- **Direction** from the robot: the bearing of the centre (robot frame, left positive) in eight
+  45-degree sectors: ahead, ahead-left, left, behind-left, behind, ... (:func:`direction`).
+- **Visibility**: the fraction of an object's bearing interval covered by nearer objects (per
+  the behind rule) whose top is at least as high: ``hidden`` from :data:`HIDDEN_FRACTION`,
+  ``partly_hidden`` from :data:`PARTLY_FRACTION`, else ``visible``.
+- **Groups**: objects of one label joined by footprints at most :data:`GROUP_GAP` apart (or
+  stacked), :data:`GROUP_MIN` or more: ``stack`` (one column), ``line`` (columns within
+  :data:`LINE_WIDTH` of a straight line) or ``cluster``. A line ``crosses the workspace`` when both
+  ends are within :data:`WALL_GAP` of opposite workspace walls. Relations between members of one
+  group are left out; relations of an outside object to several members are stated once, against
+  the group (left / right are not stated for groups).
+- **Reachability** (with a robot pose and a grid): walk, fly or none, by
+  :class:`planner.object_goal.Reachability` (the Aerial-Ground A*'s own connectivity and costs).
+- **Uncertainties**: detector score below :data:`LOW_SCORE`, a size not from the catalog, a
+  position from the depth map only, an object that seems to float.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from collections import defaultdict
+from typing import Any, Sequence
+
+import numpy as np
+
+from pipeline.scene import Scene, SceneObject
+
+from .grid import PlanningGrid
+from .object_goal import Reachability, footprint, footprint_distance
+from .route import Route
+
+GRAPH_SCHEMA_VERSION = 1
+SUPPORT_TOL = 0.10  # [m]
+SUPPORT_OVERLAP = 0.30  # fraction of the upper footprint
+NEXT_TO_GAP = 0.50  # [m]
+BEHIND_OVERLAP = 0.25  # fraction of the narrower bearing interval
+BEHIND_DEPTH = 0.30  # [m]
+SIDE_GAP = 1.00  # [m]
+HIDDEN_FRACTION = 0.90
+PARTLY_FRACTION = 0.25
+GROUP_GAP = 0.30  # [m]
+GROUP_MIN = 3
+LINE_WIDTH = 0.30  # [m]
+WALL_GAP = 0.50  # [m]
+LOW_SCORE = 0.50
+COLUMN_TOL = 0.25  # [m]: members whose centres are this close horizontally form one column
+SECTORS = ("ahead", "ahead-left", "left", "behind-left", "behind", "behind-right", "right", "ahead-right")
+
+RobotPose = tuple[float, float, float, float]
+"""``(x, y, z, yaw)``: world position [m] and heading [rad] about +z (the robot's x axis)."""
+
+
+class SceneGraphError(ValueError):
+    """Bad input to the graph builder; ``field`` names it."""
+
+
+def check_robot(robot: Sequence[float]) -> RobotPose:
+    """A validated robot pose ``(x, y, z, yaw [rad])``; raises naming the bad component."""
+    names = ("robot.x", "robot.y", "robot.z", "robot.yaw")
+    if len(robot) != 4:
+        raise SceneGraphError(f"robot: expected x, y, z, yaw, got {len(robot)} values")
+    out = []
+    for name, v in zip(names, robot):
+        try:
+            f = float(v)
+        except (TypeError, ValueError):
+            raise SceneGraphError(f"{name}: must be a number, got {v!r}") from None
+        if not math.isfinite(f):
+            raise SceneGraphError(f"{name}: must be finite, got {v!r}")
+        out.append(f)
+    return (out[0], out[1], out[2], out[3])
+
+
+def direction(bearing: float) -> str:
+    """Sector name of a bearing [rad] in the robot frame (0 ahead, positive to the left)."""
+    deg = math.degrees(bearing) % 360.0
+    return SECTORS[int(((deg + 22.5) % 360.0) // 45.0)]
+
+
+def _wrap(a: np.ndarray | float) -> Any:
+    return (np.asarray(a) + np.pi) % (2 * np.pi) - np.pi
+
+
+def _polygon_gap(a: np.ndarray, b: np.ndarray) -> float:
+    """Distance [m] between two convex polygons ``[n, 2]`` (0 when they overlap)."""
+    def inside(p: np.ndarray, poly: np.ndarray) -> bool:
+        e = np.roll(poly, -1, axis=0) - poly
+        r = p - poly
+        cross = e[:, 0] * r[:, 1] - e[:, 1] * r[:, 0]
+        return bool(np.all(cross >= -1e-12) or np.all(cross <= 1e-12))
+
+    def seg_dist(p: np.ndarray, s0: np.ndarray, s1: np.ndarray) -> float:
+        d = s1 - s0
+        t = float(np.clip(np.dot(p - s0, d) / max(np.dot(d, d), 1e-18), 0.0, 1.0))
+        return float(np.linalg.norm(p - (s0 + t * d)))
+
+    if any(inside(p, b) for p in a) or any(inside(p, a) for p in b):
+        return 0.0
+    best = math.inf
+    for P, Q in ((a, b), (b, a)):
+        for p in P:
+            for i in range(len(Q)):
+                best = min(best, seg_dist(p, Q[i], Q[(i + 1) % len(Q)]))
+    # edges that cross each other with no vertex inside (a plus shape)
+    for i in range(len(a)):
+        for j in range(len(b)):
+            if _segments_cross(a[i], a[(i + 1) % len(a)], b[j], b[(j + 1) % len(b)]):
+                return 0.0
+    return best
+
+
+def _segments_cross(p1: np.ndarray, p2: np.ndarray, q1: np.ndarray, q2: np.ndarray) -> bool:
+    def orient(a: np.ndarray, b: np.ndarray, c: np.ndarray) -> float:
+        return float((b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]))
+    d1, d2 = orient(q1, q2, p1), orient(q1, q2, p2)
+    d3, d4 = orient(p1, p2, q1), orient(p1, p2, q2)
+    return d1 * d2 < 0 and d3 * d4 < 0
+
+
+def _overlap_area(a: SceneObject, b: SceneObject, samples: int = 9) -> float:
+    """Fraction of ``a``'s footprint inside ``b``'s (sampled on a ``samples`` x ``samples`` grid)."""
+    w, _, l = a.size
+    c, s = math.cos(a.yaw), math.sin(a.yaw)
+    u = (np.arange(samples) + 0.5) / samples - 0.5
+    uu, vv = np.meshgrid(u * l, u * w, indexing="ij")
+    xy = np.stack([a.position[0] + c * uu - s * vv, a.position[1] + s * uu + c * vv], axis=-1).reshape(-1, 2)
+    return float(np.mean(footprint_distance(b, xy) <= 1e-9))
+
+
+def _bottom(o: SceneObject) -> float:
+    return o.position[2] - o.size[1] / 2
+
+
+def _top(o: SceneObject) -> float:
+    return o.position[2] + o.size[1] / 2
+
+
+def natural_key(text: str) -> tuple[Any, ...]:
+    """Sort key that orders ``box-2`` before ``box-10``."""
+    return tuple((0, int(t), "") if t.isdigit() else (1, 0, t) for t in re.split(r"(\d+)", text) if t)
+
+
+def _r(v: float, nd: int = 3) -> float:
+    return round(float(v), nd)
+
+
+class _View:
+    """Bearing intervals and distances of objects from the robot."""
+
+    def __init__(self, objs: Sequence[SceneObject], robot: RobotPose) -> None:
+        x, y, _, yaw = robot
+        self.lo = np.zeros(len(objs))
+        self.hi = np.zeros(len(objs))
+        self.centre = np.zeros(len(objs))
+        self.near = np.zeros(len(objs))
+        self.bearing = np.zeros(len(objs))
+        self.contains = np.zeros(len(objs), dtype=bool)
+        for n, o in enumerate(objs):
+            corners = footprint(o) - (x, y)
+            ang = _wrap(np.arctan2(corners[:, 1], corners[:, 0]) - yaw)
+            b = float(_wrap(math.atan2(o.position[1] - y, o.position[0] - x) - yaw))
+            rel = _wrap(ang - b)  # corners relative to the centre's bearing: no wrap-around
+            self.lo[n], self.hi[n] = b + rel.min(), b + rel.max()
+            self.bearing[n] = b
+            self.centre[n] = math.hypot(o.position[0] - x, o.position[1] - y)
+            self.near[n] = float(footprint_distance(o, np.array([[x, y]]))[0])
+            self.contains[n] = self.near[n] <= 0.0 or self.hi[n] - self.lo[n] >= math.pi
+
+    def _shifted(self, a: int, b: int) -> tuple[float, float]:
+        """``b``'s bearing interval moved by whole turns next to ``a``'s."""
+        shift = 2 * math.pi * round((self.bearing[b] - self.bearing[a]) / (2 * math.pi))
+        return self.lo[b] - shift, self.hi[b] - shift
+
+    def overlap(self, a: int, b: int) -> float:
+        """Overlap of the bearing intervals as a fraction of the narrower one."""
+        blo, bhi = self._shifted(a, b)
+        lo, hi = max(self.lo[a], blo), min(self.hi[a], bhi)
+        narrow = max(min(self.hi[a] - self.lo[a], bhi - blo), 1e-9)
+        return max(0.0, hi - lo) / narrow
+
+    def behind(self, a: int, b: int) -> bool:
+        """Whether object ``a`` is behind object ``b`` as seen from the robot."""
+        if self.contains[a] or self.contains[b]:
+            return False
+        return (self.centre[a] - self.centre[b] >= BEHIND_DEPTH and self.near[a] > self.near[b]
+                and self.overlap(a, b) >= BEHIND_OVERLAP)
+
+    def left_of(self, a: int, b: int) -> bool:
+        """Whether ``a``'s bearing interval lies wholly to the left of ``b``'s."""
+        if self.contains[a] or self.contains[b]:
+            return False
+        return self.lo[a] > self._shifted(a, b)[1]
+
+    def hidden_fraction(self, a: int, coverers: Sequence[int]) -> float:
+        iv = []
+        for b in coverers:
+            blo, bhi = self._shifted(a, b)
+            lo, hi = max(self.lo[a], blo), min(self.hi[a], bhi)
+            if hi > lo:
+                iv.append((lo, hi))
+        iv.sort()
+        covered, end = 0.0, -math.inf
+        for lo, hi in iv:
+            lo = max(lo, end)
+            if hi > lo:
+                covered += hi - lo
+                end = hi
+        return covered / max(self.hi[a] - self.lo[a], 1e-9)
+
+
+def _support(objs: Sequence[SceneObject], floor: float) -> list[tuple[str | None, float]]:
+    """For each object: ``("floor" | id | None, gap [m])``."""
+    out: list[tuple[str | None, float]] = []
+    for a in objs:
+        bot = _bottom(a)
+        if abs(bot - floor) <= SUPPORT_TOL:
+            out.append(("floor", _r(bot - floor)))
+            continue
+        best: tuple[float, float, str] | None = None
+        for b in objs:
+            if b is a or abs(_top(b) - bot) > SUPPORT_TOL:
+                continue
+            frac = _overlap_area(a, b)
+            if frac >= SUPPORT_OVERLAP:
+                key = (_top(b), frac, b.id)
+                if best is None or key[:2] > best[:2]:
+                    best = key
+        if best is not None:
+            out.append((best[2], _r(bot - best[0])))
+        else:
+            out.append((None, _r(bot - floor)))
+    return out
+
+
+def _groups(objs: Sequence[SceneObject], gaps: dict[tuple[int, int], float], support: list[tuple[str | None, float]],
+            grid: PlanningGrid | None) -> list[dict[str, Any]]:
+    ids = {o.id: n for n, o in enumerate(objs)}
+    parent = list(range(len(objs)))
+
+    def find(i: int) -> int:
+        while parent[i] != i:
+            parent[i] = parent[parent[i]]
+            i = parent[i]
+        return i
+
+    def join(a: int, b: int) -> None:
+        ra, rb = find(a), find(b)
+        if ra != rb:
+            parent[max(ra, rb)] = min(ra, rb)
+
+    for (a, b), gap in gaps.items():
+        if objs[a].label == objs[b].label and gap <= GROUP_GAP:
+            join(a, b)
+    for n, (on, _) in enumerate(support):
+        if on not in (None, "floor") and objs[ids[on]].label == objs[n].label:
+            join(n, ids[on])
+    members: dict[int, list[int]] = defaultdict(list)
+    for n in range(len(objs)):
+        members[find(n)].append(n)
+    out: list[dict[str, Any]] = []
+    for root in sorted(members):
+        mem = members[root]
+        if len(mem) < GROUP_MIN:
+            continue
+        out.append(_describe_group(f"group-{len(out) + 1}", [objs[n] for n in mem], grid))
+    return out
+
+
+def _describe_group(gid: str, mem: list[SceneObject], grid: PlanningGrid | None) -> dict[str, Any]:
+    xy = np.array([o.position[:2] for o in mem])
+    cols: list[np.ndarray] = []
+    for p in xy:
+        if not any(np.hypot(*(c - p)) <= COLUMN_TOL for c in cols):
+            cols.append(p)
+    corners = np.concatenate([footprint(o) for o in mem])
+    centre = corners.mean(axis=0)
+    kind, axis = "cluster", np.array([1.0, 0.0])
+    if len(cols) == 1:
+        kind = "stack"
+    else:
+        c = np.array(cols)
+        _, _, vt = np.linalg.svd(c - c.mean(axis=0))
+        axis = vt[0]
+        off = np.abs((c - c.mean(axis=0)) @ np.array([-axis[1], axis[0]]))
+        if off.max() <= LINE_WIDTH:
+            kind = "line"
+    along = (corners - centre) @ axis
+    across = (corners - centre) @ np.array([-axis[1], axis[0]])
+    g: dict[str, Any] = {
+        "id": gid, "kind": kind, "label": mem[0].label, "members": sorted((o.id for o in mem), key=natural_key),
+        "columns": len(cols),
+        "centre": [_r(centre[0]), _r(centre[1]), _r((min(map(_bottom, mem)) + max(map(_top, mem))) / 2)],
+        "length": _r(float(along.max() - along.min())), "width": _r(float(across.max() - across.min())),
+        "height": _r(max(map(_top, mem)) - min(map(_bottom, mem))),
+        "axis_deg": _r(math.degrees(math.atan2(axis[1], axis[0])) % 180.0, 1),
+        "crosses_workspace": False,
+    }
+    if kind == "line" and grid is not None:
+        ws = grid.workspace
+        ends = [centre + axis * along.min(), centre + axis * along.max()]
+        for a in (0, 1):
+            lo_end = min(ends, key=lambda e: e[a])
+            hi_end = max(ends, key=lambda e: e[a])
+            if lo_end[a] - ws.min[a] <= WALL_GAP and ws.max[a] - hi_end[a] <= WALL_GAP:
+                g["crosses_workspace"] = True
+    return g
+
+
+def build_scene_graph(scene: Scene, robot: Sequence[float] | None = None, grid: PlanningGrid | None = None,
+                      route: Route | None = None, floor: float | None = None) -> dict[str, Any]:
+    """The scene graph of a world-frame scene (see the module docstring for the rules).
+
+    Args:
+        scene: Objects in the world frame.
+        robot: ``(x, y, z, yaw)`` robot pose (world [m], heading [rad]) or ``None`` (no distances,
+            directions, views or reachability).
+        grid: Planning grid for reachability (and the workspace floor and walls), or ``None``.
+        route: A route on ``grid`` whose costs the reachability uses (default costs otherwise).
+        floor: Floor height [m] (default the grid's floor, else 0).
+
+    Returns:
+        A JSON-ready dict: ``schema``, ``version``, ``frame``, ``robot``, ``workspace``, ``objects``,
+        ``relations``, ``groups``, ``uncertainties``; lists in a deterministic order.
+    """
+    for o in scene.objects:
+        if o.frame != "world":
+            raise SceneGraphError(f"objects[{o.id}].frame: the scene graph needs world-frame objects, got {o.frame}")
+    pose = check_robot(robot) if robot is not None else None
+    objs = sorted(scene.objects, key=lambda o: natural_key(o.id))
+    fl = float(floor) if floor is not None else (grid.workspace.floor if grid is not None else 0.0)
+    n = len(objs)
+    support = _support(objs, fl)
+    feet = [footprint(o) for o in objs]
+    gaps: dict[tuple[int, int], float] = {}
+    for a in range(n):
+        for b in range(a + 1, n):
+            # cheap bound first: centres farther apart than both half-diagonals plus the largest gap
+            ra = math.hypot(objs[a].size[0], objs[a].size[2]) / 2
+            rb = math.hypot(objs[b].size[0], objs[b].size[2]) / 2
+            if math.dist(objs[a].position[:2], objs[b].position[:2]) - ra - rb > max(NEXT_TO_GAP, SIDE_GAP, GROUP_GAP):
+                continue
+            gaps[(a, b)] = _polygon_gap(feet[a], feet[b])
+    groups = _groups(objs, gaps, support, grid)
+    group_of = {m: g["id"] for g in groups for m in g["members"]}
+    rel: set[tuple[str, str, str]] = set()
+
+    def add(a: int, kind: str, b: int) -> None:
+        sa, sb = objs[a].id, objs[b].id
+        ga, gb = group_of.get(sa), group_of.get(sb)
+        if ga is not None and ga == gb:
+            return  # inside one group: implied by the group
+        if (ga or gb) and kind in ("left_of", "right_of"):
+            return  # a group spans too wide a view for left / right to say much
+        rel.add((ga or sa, kind, gb or sb))
+
+    idx = {o.id: k for k, o in enumerate(objs)}
+    for a, (on, _) in enumerate(support):
+        if on not in (None, "floor"):
+            add(a, "on_top_of", idx[on])
+            add(idx[on], "under", a)
+    for (a, b), gap in gaps.items():
+        if gap > NEXT_TO_GAP or support[a][0] == objs[b].id or support[b][0] == objs[a].id:
+            continue
+        if min(_top(objs[a]), _top(objs[b])) <= max(_bottom(objs[a]), _bottom(objs[b])):
+            continue
+        x, y = sorted((a, b), key=lambda k: group_of.get(objs[k].id, objs[k].id))
+        add(x, "next_to", y)
+    records: list[dict[str, Any]] = []
+    view = _View(objs, pose) if pose is not None else None
+    reach = Reachability(grid, pose[:3], route) if (pose is not None and grid is not None) else None
+    if view is not None:
+        for a in range(n):
+            for b in range(n):
+                if a == b:
+                    continue
+                if support[a][0] != objs[b].id and support[b][0] != objs[a].id and view.behind(a, b):
+                    add(a, "behind", b)
+                    add(b, "in_front_of", a)
+                if a < b and gaps.get((a, b), math.inf) <= SIDE_GAP:
+                    if view.left_of(a, b):
+                        add(a, "left_of", b)
+                        add(b, "right_of", a)
+                    elif view.left_of(b, a):
+                        add(b, "left_of", a)
+                        add(a, "right_of", b)
+    uncertain: list[str] = []
+    for a, o in enumerate(objs):
+        rec: dict[str, Any] = {
+            "id": o.id, "label": o.label, "score": _r(o.score),
+            "centre": [_r(v) for v in o.position], "size": [_r(v) for v in o.size], "yaw": _r(o.yaw, 4),
+            "bottom": _r(_bottom(o)), "top": _r(_top(o)),
+            "on": support[a][0], "group": group_of.get(o.id),
+            "from_robot": None, "visibility": None, "reach": None, "uncertain": [],
+        }
+        if view is not None:
+            rec["from_robot"] = {"distance": _r(view.centre[a], 2), "nearest": _r(view.near[a], 2),
+                                 "bearing_deg": _r(math.degrees(view.bearing[a]), 1),
+                                 "direction": direction(view.bearing[a])}
+            cover = [b for b in range(n) if b != a and _top(objs[b]) >= _top(o) - 1e-6
+                     and support[a][0] != objs[b].id and view.behind(a, b)]
+            frac = view.hidden_fraction(a, cover)
+            rec["visibility"] = ("hidden" if frac >= HIDDEN_FRACTION else
+                                 "partly_hidden" if frac >= PARTLY_FRACTION else "visible")
+        if reach is not None:
+            app = reach.approach(o)
+            rec["reach"] = {"mode": app.mode, "goal": None if app.goal is None else [_r(v) for v in app.goal],
+                            "gap": None if app.goal is None else _r(app.gap),
+                            "cost": None if not math.isfinite(app.cost) else _r(app.cost),
+                            "planned": app.planned or None,
+                            "landing": None if app.landing is None else [_r(v) for v in app.landing],
+                            "reason": app.reason or None}
+        u = rec["uncertain"]
+        if o.score < LOW_SCORE:
+            u.append(f"low detector score {o.score:.2f}")
+        if not o.size_known:
+            u.append("size estimated, not from the catalog")
+        if o.source.method == "depth":
+            u.append("position from the depth map only")
+        if support[a][0] is None:
+            u.append(f"seems to float {support[a][1]:.2f} m above the floor with nothing under it")
+        uncertain += [f"{o.id}: {t}" for t in u]
+        records.append(rec)
+    if pose is None:
+        uncertain.append("robot pose unknown: no distances, directions, visibility or reachability")
+    elif grid is None:
+        uncertain.append("no planning grid: reachability not computed")
+    if reach is not None and reach.start_problem:
+        uncertain.append(f"reachability unknown: {reach.start_problem}")
+    ws = None
+    if grid is not None:
+        w = grid.workspace
+        ws = {"min": [_r(v) for v in w.min], "max": [_r(v) for v in w.max], "resolution": _r(w.resolution),
+              "margin": _r(grid.margin)}
+    order = {"on_top_of": 0, "under": 1, "next_to": 2, "behind": 3, "in_front_of": 4, "left_of": 5, "right_of": 6}
+    relations = [{"subject": s, "relation": k, "object": t}
+                 for s, k, t in sorted(rel, key=lambda r: (order[r[1]], r[0], r[2]))]
+    return {
+        "schema": "morphonavi.scene_graph",
+        "version": GRAPH_SCHEMA_VERSION,
+        "frame": "world",
+        "units": "metres, degrees for bearings and axes, radians for yaw",
+        "robot": None if pose is None else {"position": [_r(v) for v in pose[:3]],
+                                             "yaw_deg": _r(math.degrees(pose[3]), 1)},
+        "workspace": ws,
+        "objects": records,
+        "relations": relations,
+        "groups": groups,
+        "uncertainties": uncertain,
+    }
+
+
+__all__ = ["GRAPH_SCHEMA_VERSION", "RobotPose", "SceneGraphError", "build_scene_graph", "check_robot", "direction"]

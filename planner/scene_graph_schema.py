@@ -1,0 +1,126 @@
+"""JSON Schema (draft 2020-12) of the scene graph, version :data:`planner.scene_graph.GRAPH_SCHEMA_VERSION`.
+
+The graph is what :func:`planner.scene_graph.build_scene_graph` returns and what
+``morphonavi describe SCENE.json --json`` prints. Positions are world frame [m], bearings and
+axes in degrees (bearings in the robot frame: 0 ahead, positive to the left), yaw in radians.
+A field that needs the robot pose or the grid is ``null`` without it. Version 1; a change that
+removes or renames a field bumps the version.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+_NUM = {"type": "number"}
+_VEC3 = {"type": "array", "items": _NUM, "minItems": 3, "maxItems": 3}
+_ID = {"type": "string", "minLength": 1}
+
+
+def _nullable(schema: dict[str, Any]) -> dict[str, Any]:
+    return {"anyOf": [schema, {"type": "null"}]}
+
+
+_OBJECT = {
+    "type": "object",
+    "required": ["id", "label", "score", "centre", "size", "yaw", "bottom", "top", "on", "group", "from_robot",
+                 "visibility", "reach", "uncertain"],
+    "additionalProperties": False,
+    "properties": {
+        "id": _ID,
+        "label": {"type": "string"},
+        "score": {"type": "number", "minimum": 0, "maximum": 1},
+        "centre": _VEC3,
+        "size": {**_VEC3, "description": "[w, h, l] full extents, h vertical"},
+        "yaw": _NUM,
+        "bottom": _NUM,
+        "top": _NUM,
+        "on": {"anyOf": [_ID, {"type": "null"}],
+               "description": "'floor', the id of the object it stands on, or null (unsupported)"},
+        "group": _nullable(_ID),
+        "from_robot": _nullable({
+            "type": "object", "additionalProperties": False,
+            "required": ["distance", "nearest", "bearing_deg", "direction"],
+            "properties": {
+                "distance": {"type": "number", "minimum": 0, "description": "horizontal, to the centre [m]"},
+                "nearest": {"type": "number", "minimum": 0, "description": "horizontal, to the footprint [m]"},
+                "bearing_deg": {"type": "number", "minimum": -180, "maximum": 180},
+                "direction": {"enum": ["ahead", "ahead-left", "left", "behind-left", "behind", "behind-right",
+                                       "right", "ahead-right"]},
+            },
+        }),
+        "visibility": {"enum": ["visible", "partly_hidden", "hidden", None]},
+        "reach": _nullable({
+            "type": "object", "additionalProperties": False,
+            "required": ["mode", "goal", "gap", "cost", "planned", "landing", "reason"],
+            "properties": {
+                "mode": {"enum": ["walk", "fly", "none", "unknown"]},
+                "goal": _nullable(_VEC3),
+                "gap": _nullable({"type": "number", "minimum": 0}),
+                "cost": _nullable({"type": "number", "minimum": 0}),
+                "planned": {"enum": ["walk", "walk+fly", None]},
+                "landing": _nullable(_VEC3),
+                "reason": _nullable({"type": "string"}),
+            },
+        }),
+        "uncertain": {"type": "array", "items": {"type": "string"}},
+    },
+}
+
+_GROUP = {
+    "type": "object", "additionalProperties": False,
+    "required": ["id", "kind", "label", "members", "columns", "centre", "length", "width", "height", "axis_deg",
+                 "crosses_workspace"],
+    "properties": {
+        "id": {"type": "string", "pattern": "^group-[0-9]+$"},
+        "kind": {"enum": ["line", "stack", "cluster"]},
+        "label": {"type": "string"},
+        "members": {"type": "array", "items": _ID, "minItems": 2},
+        "columns": {"type": "integer", "minimum": 1},
+        "centre": _VEC3,
+        "length": {"type": "number", "minimum": 0},
+        "width": {"type": "number", "minimum": 0},
+        "height": {"type": "number", "minimum": 0},
+        "axis_deg": {"type": "number", "minimum": 0, "maximum": 180},
+        "crosses_workspace": {"type": "boolean"},
+    },
+}
+
+SCENE_GRAPH_SCHEMA: dict[str, Any] = {
+    "$schema": "https://json-schema.org/draft/2020-12/schema",
+    "$id": "https://morphonavi.example/scene_graph/v1.json",
+    "title": "MorphoNavi scene graph, version 1",
+    "type": "object",
+    "additionalProperties": False,
+    "required": ["schema", "version", "frame", "units", "robot", "workspace", "objects", "relations", "groups",
+                 "uncertainties"],
+    "properties": {
+        "schema": {"const": "morphonavi.scene_graph"},
+        "version": {"const": 1},
+        "frame": {"const": "world"},
+        "units": {"type": "string"},
+        "robot": _nullable({
+            "type": "object", "additionalProperties": False, "required": ["position", "yaw_deg"],
+            "properties": {"position": _VEC3, "yaw_deg": _NUM},
+        }),
+        "workspace": _nullable({
+            "type": "object", "additionalProperties": False, "required": ["min", "max", "resolution", "margin"],
+            "properties": {"min": _VEC3, "max": _VEC3, "resolution": {"type": "number", "exclusiveMinimum": 0},
+                           "margin": {"type": "number", "minimum": 0}},
+        }),
+        "objects": {"type": "array", "items": _OBJECT},
+        "relations": {"type": "array", "items": {
+            "type": "object", "additionalProperties": False, "required": ["subject", "relation", "object"],
+            "properties": {
+                "subject": _ID,
+                "relation": {"enum": ["on_top_of", "under", "next_to", "behind", "in_front_of", "left_of",
+                                      "right_of"]},
+                "object": _ID,
+            },
+        }},
+        "groups": {"type": "array", "items": _GROUP},
+        "uncertainties": {"type": "array", "items": {"type": "string"}},
+    },
+}
+"""The schema; subjects and objects of relations are object ids or group ids (``group-N``)."""
+
+__all__ = ["SCENE_GRAPH_SCHEMA"]
