@@ -12,26 +12,74 @@ class CliError(Exception):
     """A user-facing error: printed without a traceback, exit status 2."""
 
 
-def _vec3(text: str) -> tuple[float, float, float]:
-    try:
-        parts = [float(p) for p in text.split(",")]
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected 'x,y,z' in metres, got {text!r}") from None
-    if len(parts) == 2:
-        parts.append(0.0)
-    if len(parts) != 3:
-        raise argparse.ArgumentTypeError(f"expected 'x,y,z' in metres, got {text!r}")
-    return (parts[0], parts[1], parts[2])
+def _numbers(option: str, counts: tuple[int, ...], form: str) -> Callable[[str], list[float]]:
+    """An argparse ``type`` for a comma-separated list of finite numbers (negative ones included)."""
+    from pipeline.option_values import ValueListError, parse_numbers
+
+    def parse(text: str) -> list[float]:
+        try:
+            return parse_numbers(text, option, counts, form)
+        except ValueListError as exc:
+            raise argparse.ArgumentTypeError(str(exc)) from None
+
+    parse.__name__ = form  # argparse names the type in some messages
+    return parse
+
+
+def _vec3(option: str) -> Callable[[str], tuple[float, float, float]]:
+    parse = _numbers(option, (3,), "x,y,z in metres")
+
+    def vec3(text: str) -> tuple[float, float, float]:
+        v = parse(text)
+        return (v[0], v[1], v[2])
+
+    return vec3
 
 
 def _bounds(text: str) -> tuple[tuple[float, float, float], tuple[float, float, float]]:
-    try:
-        v = [float(p) for p in text.split(",")]
-    except ValueError:
-        v = []
-    if len(v) != 6:
-        raise argparse.ArgumentTypeError("expected 'xmin,ymin,zmin,xmax,ymax,zmax' in metres")
+    v = _numbers("--bounds", (6,), "xmin,ymin,zmin,xmax,ymax,zmax in metres")(text)
+    if not (v[0] < v[3] and v[1] < v[4] and v[2] < v[5]):
+        raise argparse.ArgumentTypeError(f"--bounds: every minimum must be below its maximum, got {text!r}")
     return (v[0], v[1], v[2]), (v[3], v[4], v[5])
+
+
+def join_negative_values(parser: argparse.ArgumentParser, argv: Sequence[str]) -> list[str]:
+    """``--pose -1,2,0,90`` -> ``--pose=-1,2,0,90`` for every option that takes one value.
+
+    argparse takes a value that starts with ``-`` for an option ("expected one argument") unless it
+    is a plain negative number; a list such as ``-1,2,0,90`` (or ``-.5``, ``-inf``) can never be an
+    option name, so it is attached to the option before it.
+    """
+    from pipeline.option_values import looks_like_negative_value
+
+    takes_value: set[str] = set()
+
+    def collect(p: argparse.ArgumentParser) -> None:
+        for action in p._actions:
+            if isinstance(action, argparse._SubParsersAction):
+                for sub in action.choices.values():
+                    collect(sub)
+            elif action.option_strings and action.nargs is None and action.const is None and \
+                    not isinstance(action, (argparse._StoreTrueAction, argparse._StoreFalseAction,
+                                            argparse._CountAction, argparse._HelpAction, argparse._VersionAction)):
+                takes_value.update(action.option_strings)
+
+    collect(parser)
+    out: list[str] = []
+    args = list(argv)
+    i = 0
+    while i < len(args):
+        tok = args[i]
+        if tok == "--":
+            out.extend(args[i:])
+            break
+        if tok in takes_value and i + 1 < len(args) and looks_like_negative_value(args[i + 1]):
+            out.append(f"{tok}={args[i + 1]}")
+            i += 2
+            continue
+        out.append(tok)
+        i += 1
+    return out
 
 
 # --- plan ---------------------------------------------------------------------------------------
@@ -55,10 +103,19 @@ def cmd_plan(args: argparse.Namespace) -> int:
     from planner.mission import MissionError
     from planner.route import Route
 
+    out = Path(args.out)
+    if out.is_dir():
+        raise CliError(f"--out {out} is a directory; give a file name such as {out / 'mission.json'}")
+    if not out.parent.is_dir():
+        raise CliError(f"--out {out}: the folder {out.parent} does not exist")
     try:
         scene = Scene.load(args.scene)
     except SceneError as exc:
         raise CliError(f"{args.scene}: {exc}") from None
+    except RecursionError:
+        raise CliError(f"{args.scene}: JSON nested too deeply") from None
+    except OSError as exc:
+        raise CliError(f"{args.scene}: cannot read: {exc.strerror or exc}") from None
     try:
         ws = Workspace(args.bounds[0], args.bounds[1], args.resolution)
         weights = CostWeights(args.w_ground, args.w_takeoff, args.w_flight, args.w_danger)
@@ -83,8 +140,10 @@ def cmd_plan(args: argparse.Namespace) -> int:
     except MissionError as exc:
         raise CliError(f"cannot build the mission: {exc}") from None
     print(mission.summary())
-    out = Path(args.out)
-    mission.save(out)
+    try:
+        mission.save(out)
+    except OSError as exc:
+        raise CliError(f"--out {out}: cannot write: {exc.strerror or exc}") from None
     print(f"mission written to {out}")
     return 0
 
@@ -94,25 +153,41 @@ def cmd_plan(args: argparse.Namespace) -> int:
 
 def cmd_models(args: argparse.Namespace) -> int:
     from pipeline.models.cli_support import models_fetch, models_list, models_verify
+    from pipeline.option_values import check_model_dir
 
+    model_dir = check_model_dir(args.model_dir, "--model-dir")
     if args.action == "list":
-        print(models_list(args.dir))
+        print(models_list(model_dir))
         return 0
     if args.action == "fetch":
-        if not args.names:
-            raise CliError("fetch needs a model or set name, e.g. 'morphonavi models fetch offline'")
-        return models_fetch(args.names, args.dir)
-    text, code = models_verify(args.dir, args.names or None)
+        return models_fetch(args.names, model_dir)
+    text, code = models_verify(model_dir, args.names or None)
     print(text)
     return code
 
 
 def _add_models_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
+    from pipeline.option_values import add_model_dir_option
+
     p = sub.add_parser("models", help="list, fetch (download with checksums) or verify model weights",
-                       description="Model weights live in --dir, else $MORPHONAVI_MODELS, else the user cache dir.")
-    p.add_argument("action", choices=("list", "fetch", "verify"))
-    p.add_argument("names", nargs="*", help="model or set names (default, offline, cloud, yolox_nano, ...)")
-    p.add_argument("--dir", type=Path, default=None, help="models directory")
+                       description="Model weights live in --model-dir, else $MORPHONAVI_MODELS, else the user "
+                                   "cache dir.")
+    add_model_dir_option(p, "--dir")
+    actions = p.add_subparsers(dest="action", required=True, metavar="ACTION")
+    for name, helptext, names_help, nargs in (
+        ("list", "known models, present or missing, and where they are looked for", None, None),
+        ("fetch", "download models or sets with checksums (resumes partial files)",
+         "model or set names: offline, default, cloud, yolox_nano, ...", "+"),
+        ("verify", "check checksums, onnxruntime loading and the I/O signature of present models",
+         "model or set names (default: every present model)", "*"),
+    ):
+        a = actions.add_parser(name, help=helptext, description=helptext[0].upper() + helptext[1:] + ".")
+        if nargs is not None:
+            a.add_argument("names", nargs=nargs, help=names_help)
+        else:
+            a.set_defaults(names=[])
+        # also after the action (morphonavi models verify --model-dir DIR); SUPPRESS keeps the parent's value
+        add_model_dir_option(a, "--dir", default=argparse.SUPPRESS)
     p.set_defaults(func=cmd_models)
 
 
@@ -129,8 +204,9 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("plan", help="plan a multi-stop Aerial-Ground A* path through a scene and write the mission",
                        description="Plan start -> goal1 -> goal2 ... on the scene's grid and write the mission JSON.")
     p.add_argument("scene", type=Path, help="scene JSON (world frame)")
-    p.add_argument("--start", type=_vec3, required=True, help="start 'x,y,z' [m] (world frame)")
-    p.add_argument("--goal", type=_vec3, action="append", required=True, help="goal 'x,y,z' [m]; repeat for stops")
+    p.add_argument("--start", type=_vec3("--start"), required=True, help="start 'x,y,z' [m] (world frame)")
+    p.add_argument("--goal", type=_vec3("--goal"), action="append", required=True,
+                   help="goal 'x,y,z' [m]; repeat for stops")
     p.add_argument("--out", default="mission.json", help="mission JSON to write (default mission.json)")
     _add_planner_args(p)
     p.set_defaults(func=cmd_plan)
@@ -150,11 +226,13 @@ def _extra_commands() -> list[Callable[[argparse._SubParsersAction], None]]:  # 
 
 
 def main(argv: Sequence[str] | None = None) -> int:
+    from pipeline.option_values import OptionError
+
     parser = build_parser()
-    args = parser.parse_args(argv)
+    args = parser.parse_args(join_negative_values(parser, sys.argv[1:] if argv is None else argv))
     try:
         return int(args.func(args) or 0)
-    except CliError as exc:
+    except (CliError, OptionError) as exc:
         print(f"morphonavi {args.command}: error: {exc}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:

@@ -53,12 +53,12 @@ def _non_negative(text: str) -> float:
 
 
 def _vec3(text: str) -> tuple[float, float, float]:
+    from pipeline.option_values import ValueListError, parse_numbers
+
     try:
-        v = [float(t) for t in text.split(",")]
-    except ValueError:
-        v = []
-    if len(v) != 3 or not all(math.isfinite(x) for x in v):
-        raise argparse.ArgumentTypeError(f"expected 'x,y,z' in metres, got {text!r}")
+        v = parse_numbers(text, "--ned-origin", (3,), "x,y,z in metres")
+    except ValueListError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
     return (v[0], v[1], v[2])
 
 
@@ -96,9 +96,9 @@ def add_console_parser(subparsers: argparse._SubParsersAction) -> argparse.Argum
                    help="interface to listen on (default 127.0.0.1: this machine only). Anything else lets "
                         "whoever reaches the port drive the robot: there is no login")
     p.add_argument("--port", type=_port, default=8080, help="TCP port (default 8080; the next free one if taken)")
-    p.add_argument("--models", type=Path, default=None, metavar="DIR",
-                   help="folder with the offline model weights (morphonavi models fetch); without it the "
-                        "simulated robot is mapped with ground-truth perception")
+    p.add_argument("--model-dir", "--models", dest="models", type=Path, default=None, metavar="DIR",
+                   help="folder with the offline model weights (morphonavi models fetch; --models is the old "
+                        "name); without it the simulated robot is mapped with ground-truth perception")
     p.add_argument("--resolution", type=_resolution, default=0.25,
                    help="planning grid cell size [m], 0.05..1 (default 0.25)")
     p.add_argument("--margin", type=_non_negative, default=0.35,
@@ -140,7 +140,7 @@ def cmd_console(args: argparse.Namespace) -> int:
     if args.captures is not None and not Path(args.captures).is_dir():
         raise CliError(f"--captures {args.captures}: no such folder")
     if args.models is not None and not Path(args.models).is_dir():
-        raise CliError(f"--models {args.models}: no such folder (fetch the models with: morphonavi models fetch NAME)")
+        raise CliError(f"--model-dir {args.models}: no such folder (fetch the models with: morphonavi models fetch NAME)")
     config = ConsoleConfig(
         robot=args.robot, scene_dir=args.scene if args.scene is not None else DEFAULT_SCENES,
         session_dir=args.session, host=args.host, port=args.port, models=args.models, fresh=args.fresh,

@@ -15,6 +15,7 @@ from typing import Any, Callable
 
 from pipeline.catalog import Catalog, CatalogError
 from pipeline.mapper import MapperConfig, load_mapping_models
+from pipeline.option_values import OptionError, add_model_dir_option, check_model_dir
 
 __all__ = ["add_bench_parser", "add_map_parser", "cmd_bench", "cmd_map", "load_mapping_models"]
 
@@ -42,7 +43,7 @@ def _add_common(p: argparse.ArgumentParser) -> None:
     g.add_argument("--models", default="offline", metavar="SET",
                    help="model set: offline (YOLOX-Nano, MobileSAM, FastDepth; default), default (OWLv2, MobileSAM, "
                         "Depth Anything V2) or cloud")
-    g.add_argument("--model-dir", type=Path, default=None, help="models directory (default: $MORPHONAVI_MODELS or the user cache)")
+    add_model_dir_option(g)
     g.add_argument("--catalog", type=Path, default=None, help="catalog TOML (default: the packaged one)")
     g.add_argument("--threads", type=int, default=None,
                    help="onnxruntime threads per model (default: 1 for YOLOX-Nano and FastDepth, every core for the rest)")
@@ -77,11 +78,22 @@ def _run(fn: Callable[[argparse.Namespace], int], command: str) -> Callable[[arg
         try:
             return fn(args)
         except (_UserError, CameraError, ImageError, MapperError, ModelError, SceneError, BenchError, CatalogError,
-                OSError) as exc:
+                OptionError, OSError) as exc:
             print(f"morphonavi {command}: error: {exc}", file=sys.stderr)
             return 2
 
     return wrapper
+
+
+def _models(args: argparse.Namespace, catalog: Catalog) -> Any:
+    """Load the model set ``--models`` from ``--model-dir`` (checked first, as is $MORPHONAVI_MODELS)."""
+    from pipeline.models.registry import MODEL_SETS
+
+    model_dir = check_model_dir(args.model_dir, "--model-dir")
+    if args.models not in MODEL_SETS and ("/" in args.models or "\\" in args.models or Path(args.models).is_dir()):
+        raise _UserError(f"--models {args.models}: --models picks a model set ({', '.join(MODEL_SETS)}); "
+                         f"for a folder of model weights use --model-dir {args.models}")
+    return load_mapping_models(args.models, model_dir, catalog, args.threads)
 
 
 def _catalog(args: argparse.Namespace) -> Catalog:
@@ -109,8 +121,10 @@ def cmd_map(args: argparse.Namespace) -> int:
     camera.intrinsics.check_image(image.shape[1], image.shape[0])
     out = Path(args.out)
     if out.exists() and out.is_dir():
-        raise _UserError(f"--out {out} is a directory; give a file name such as scene.json")
-    models = load_mapping_models(args.models, args.model_dir, catalog, args.threads)
+        raise _UserError(f"--out {out} is a directory; give a file name such as {out / 'scene.json'}")
+    if not out.parent.is_dir():
+        raise _UserError(f"--out {out}: the folder {out.parent} does not exist")
+    models = _models(args, catalog)
     with Mapper(models, catalog, _config(args)) as mapper:
         result = mapper.run(image, camera.intrinsics, camera.mount, pose, prompts=args.prompts,
                             image_name=Path(args.image).name)
@@ -164,10 +178,14 @@ def cmd_bench(args: argparse.Namespace) -> int:
     """``morphonavi bench DATASET_DIR [--gt-boxes] [--out report.json]``."""
     from pipeline.bench import format_report, run_bench
 
+    if args.out and Path(args.out).is_dir():
+        raise _UserError(f"--out {args.out} is a directory; give a file name such as {Path(args.out) / 'bench_report.json'}")
+    if args.limit is not None and args.limit < 1:
+        raise _UserError(f"--limit: must be at least 1, got {args.limit}")
     catalog = _catalog(args)
     models = None
     if not (args.gt_boxes and args.no_models):
-        models = load_mapping_models(args.models, args.model_dir, catalog, args.threads)
+        models = _models(args, catalog)
     report = run_bench(
         args.dataset, models, catalog, gt_boxes=args.gt_boxes, config=_config(args), iou_threshold=args.iou,
         limit=args.limit, sources=args.source, progress=not args.no_progress,

@@ -1,5 +1,9 @@
-"""One parser for every comma-separated list of numbers a user types (command-line options, pose
-strings): finite numbers only, a stated count, and errors that name the option.
+"""Command-line option values shared by every ``morphonavi`` command.
+
+- One parser for every comma-separated list of numbers a user types (command-line options, pose
+  strings): finite numbers only, a stated count, and errors that name the option.
+- One name for the model-folder option, ``--model-dir DIR`` (each command's old name kept as an
+  alias), and one check of it and of ``$MORPHONAVI_MODELS``.
 
 ``parse_numbers("-1,2,0,90", "--pose", (2, 3, 4), "x,y[,z[,yaw_deg]]")`` -> ``[-1.0, 2.0, 0.0, 90.0]``.
 Negative values are fine here; :func:`console.cli.main` makes sure argparse hands them over (an
@@ -9,10 +13,19 @@ option value starting with ``-`` is otherwise taken for an option).
 from __future__ import annotations
 
 import math
-from typing import Sequence
+import os
+from pathlib import Path
+from typing import Any, Sequence
+
+MODELS_ENV = "MORPHONAVI_MODELS"
+MODEL_DIR_HELP = "folder of model weights (default: $MORPHONAVI_MODELS, else the user cache dir)"
 
 
-class ValueListError(ValueError):
+class OptionError(ValueError):
+    """A command-line value that cannot be used; the message names the option."""
+
+
+class ValueListError(OptionError):
     """A list of numbers that cannot be used; the message names the option and the expected form."""
 
 
@@ -58,4 +71,29 @@ def looks_like_negative_value(token: str) -> bool:
     return bool(head) and (head[0].isdigit() or head[0] == "." or head in ("inf", "nan", "infinity"))
 
 
-__all__ = ["ValueListError", "looks_like_negative_value", "parse_numbers"]
+def add_model_dir_option(p: Any, *aliases: str, dest: str = "model_dir", default: Any = None,
+                         help: str = MODEL_DIR_HELP) -> None:
+    """Add ``--model-dir DIR`` (and a command's old names as ``aliases``) to an argparse parser."""
+    p.add_argument("--model-dir", *aliases, dest=dest, type=Path, default=default, metavar="DIR", help=help)
+
+
+def check_model_dir(explicit: str | os.PathLike[str] | None, option: str = "--model-dir") -> Path | None:
+    """``explicit`` as a path when it is usable, else ``None`` once ``$MORPHONAVI_MODELS`` is checked.
+
+    Raises:
+        OptionError: The option or ``$MORPHONAVI_MODELS`` names a file (or anything but a folder).
+    """
+    if explicit is not None and str(explicit).strip():
+        p = Path(explicit).expanduser()
+        if p.exists() and not p.is_dir():
+            raise OptionError(f"{option} {explicit}: is a file, not a folder of model weights")
+        return p
+    env = os.environ.get(MODELS_ENV, "").strip()
+    if env and Path(env).expanduser().exists() and not Path(env).expanduser().is_dir():
+        raise OptionError(f"{MODELS_ENV}={env}: is a file, not a folder of model weights "
+                          "(point it at the folder holding the model folders, or unset it)")
+    return None
+
+
+__all__ = ["MODEL_DIR_HELP", "OptionError", "ValueListError", "add_model_dir_option", "check_model_dir",
+           "looks_like_negative_value", "parse_numbers"]
