@@ -229,6 +229,8 @@ class SceneWatcher:
             data = json.loads(text)
         except json.JSONDecodeError as exc:
             raise SceneError("", f"not valid JSON (line {exc.lineno}, column {exc.colno}): {exc.msg}") from None
+        except RecursionError:
+            raise SceneError("", "not usable JSON: nested too deeply") from None
         objs = data.get("objects") if isinstance(data, dict) else None
         if isinstance(objs, list) and len(objs) > self._max_objects:
             raise SceneError("objects", f"{len(objs)} objects is over the limit of {self._max_objects} "

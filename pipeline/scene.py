@@ -294,6 +294,8 @@ def scene_from_json(text: str) -> Scene:
         data = json.loads(text)
     except json.JSONDecodeError as exc:
         raise SceneError("", f"not valid JSON (line {exc.lineno}, column {exc.colno}): {exc.msg}") from None
+    except RecursionError:
+        raise SceneError("", "not usable JSON: nested too deeply") from None
     return scene_from_dict(data)
 
 

@@ -199,3 +199,14 @@ def test_models_action_help_is_its_own(capsys: pytest.CaptureFixture[str]) -> No
     with pytest.raises(SystemExit):
         main(["models", "fetch", "--help"])
     assert "model or set names" in capsys.readouterr().out
+
+
+def test_deeply_nested_json_in_the_watched_folder_is_reported(tmp_path: Path) -> None:
+    from console.scene_watch import SceneWatcher
+
+    (tmp_path / "deep.json").write_text("[" * 100_000 + "]" * 100_000)
+    errors: list[tuple[str, str]] = []
+    watcher = SceneWatcher(tmp_path, lambda scene, name: None, lambda name, msg: errors.append((name, msg)),
+                           settle=0.0)
+    assert watcher.poll() == ["deep.json"]
+    assert errors and errors[0][0] == "deep.json" and "nested too deeply" in errors[0][1]
