@@ -68,6 +68,34 @@ class Source:
 
 
 @dataclass(frozen=True)
+class Sighting:
+    """One observation of an object by a capture, as the map fusion weighed it (world frame).
+
+    Attributes:
+        capture: Id of the capture that saw it (``None``: the object as it was before fusion kept
+            history, e.g. loaded from a file).
+        position: The observation's box centre [m].
+        yaw: Its heading of the length axis about +z [rad].
+        size: Its ``(w, h, l)`` [m].
+        sigma: 1-sigma errors ``(along the camera ray [m], across it [m], yaw [rad])``.
+        camera: Camera centre at capture [m], ``None`` if unknown (then ``sigma`` is isotropic).
+        distance: Camera-to-object-centre distance [m], ``None`` if unknown.
+        used: Whether it moved the object (``False``: rejected, or the object is pinned).
+        note: Why not used, or what was corrected.
+    """
+
+    capture: str | None
+    position: Vec3
+    yaw: float
+    size: Vec3
+    sigma: Vec3
+    camera: Vec3 | None = None
+    distance: float | None = None
+    used: bool = True
+    note: str = ""
+
+
+@dataclass(frozen=True)
 class SceneObject:
     """One object: an oriented box with a label.
 
@@ -81,6 +109,10 @@ class SceneObject:
         score: Detector confidence in [0, 1] (1 for manual or ground-truth objects).
         size_known: Whether ``size`` comes from the catalog (True) or was measured/guessed.
         source: Provenance of the estimate.
+        pinned: The operator moved, typed or confirmed it: observations never move it (see
+            :attr:`is_pinned`, which also counts ``source.method == "manual"``).
+        history: The observations fused into it, oldest first (see :mod:`pipeline.map_fusion`).
+        flags: Corrections made by the map fusion, for the operator (``set on the floor: ...``).
     """
 
     id: str
@@ -92,6 +124,14 @@ class SceneObject:
     score: float = 1.0
     size_known: bool = True
     source: Source = field(default_factory=Source)
+    pinned: bool = False
+    history: tuple[Sighting, ...] = ()
+    flags: tuple[str, ...] = ()
+
+    @property
+    def is_pinned(self) -> bool:
+        """Placed, moved or confirmed by the operator: the map fusion never moves it."""
+        return self.pinned or self.source.method == "manual"
 
     def moved(self, position: Vec3, yaw: float | None = None) -> "SceneObject":
         """A copy at a new position (and optionally heading), marked as manually placed."""
@@ -250,6 +290,53 @@ def _source_to_dict(s: Source) -> dict[str, Any]:
     return out
 
 
+def _fusion_to_dict(o: SceneObject) -> dict[str, Any]:
+    """``pinned`` / ``flags`` / ``history`` keys, written only when set (older readers ignore them)."""
+    out: dict[str, Any] = {}
+    if o.pinned:
+        out["pinned"] = True
+    if o.flags:
+        out["flags"] = list(o.flags)
+    if o.history:
+        out["history"] = [
+            {"capture": h.capture, "position": [round(v, 4) for v in h.position], "yaw": round(h.yaw, 5),
+             "size": [round(v, 4) for v in h.size], "sigma": [round(v, 5) for v in h.sigma],
+             "camera": None if h.camera is None else [round(v, 4) for v in h.camera],
+             "distance": None if h.distance is None else round(h.distance, 4), "used": h.used, "note": h.note}
+            for h in o.history
+        ]
+    return out
+
+
+def _fusion_from(r: _Reader) -> dict[str, Any]:
+    """The ``pinned`` / ``flags`` / ``history`` fields of an object entry (all optional)."""
+    pinned = r.raw("pinned", required=False)
+    if pinned is not None and not isinstance(pinned, bool):
+        raise SceneError(r._p("pinned"), f"must be true or false, got {pinned!r}")
+    flags = r.raw("flags", required=False) or []
+    if not isinstance(flags, list) or not all(isinstance(f, str) for f in flags):
+        raise SceneError(r._p("flags"), "must be a list of strings")
+    hist = r.raw("history", required=False) or []
+    if not isinstance(hist, list):
+        raise SceneError(r._p("history"), "must be a list")
+    history = []
+    for k, hd in enumerate(hist):
+        h = _Reader(hd, r._p(f"history[{k}]"))
+        used = h.raw("used", required=False)
+        if used is not None and not isinstance(used, bool):
+            raise SceneError(h._p("used"), f"must be true or false, got {used!r}")
+        note = h.raw("note", required=False) or ""
+        if not isinstance(note, str):
+            raise SceneError(h._p("note"), f"must be a string, got {note!r}")
+        history.append(Sighting(
+            capture=h.string("capture", required=False),
+            position=cast(Vec3, h.vector("position", 3)), yaw=cast(float, h.number("yaw")),
+            size=cast(Vec3, h.vector("size", 3, positive=True)), sigma=cast(Vec3, h.vector("sigma", 3, positive=True)),
+            camera=cast("Vec3 | None", h.vector("camera", 3, required=False)),
+            distance=h.number("distance", required=False, lo=0.0), used=True if used is None else used, note=note))
+    return {"pinned": bool(pinned), "flags": tuple(flags), "history": tuple(history)}
+
+
 def scene_to_dict(scene: Scene) -> dict[str, Any]:
     """The JSON-ready dict of a scene (format version :data:`SCENE_VERSION`)."""
     return {
@@ -266,6 +353,7 @@ def scene_to_dict(scene: Scene) -> dict[str, Any]:
                 "yaw": round(o.yaw, 5),
                 "size_known": o.size_known,
                 "source": _source_to_dict(o.source),
+                **_fusion_to_dict(o),
             }
             for o in scene.objects
         ],
@@ -430,6 +518,7 @@ def scene_from_dict(data: Any) -> Scene:
                 score=cast(float, r.number("score", required=False, lo=0.0, hi=1.0) if r.has("score") else 1.0),
                 size_known=True if size_known is None else size_known,
                 source=src,
+                **_fusion_from(r),
             )
         )
     caps_raw = root.raw("captures", required=False) or []
