@@ -102,6 +102,7 @@ def cmd_plan(args: argparse.Namespace) -> int:
     from planner.grid import CostWeights, GridError, Workspace, build_grid
     from planner.mission import MissionError
     from planner.route import Route
+    from console.object_goal_cli import resolve_stop
 
     out = Path(args.out)
     if out.is_dir():
@@ -128,7 +129,10 @@ def cmd_plan(args: argparse.Namespace) -> int:
     cell, why = route.check_point(args.start, "start")
     if cell is None:
         raise CliError(why)
+    if not args.goal:
+        raise CliError("give at least one stop: --goal x,y,z or --goal-object ID_OR_LABEL")
     for goal in args.goal:
+        goal = resolve_stop(goal, scene, route)
         res = route.propose(goal)
         if not res.ok:
             raise CliError(res.message)
@@ -201,12 +205,16 @@ def build_parser() -> argparse.ArgumentParser:
     )
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
 
+    from console.object_goal_cli import object_stop
+
     p = sub.add_parser("plan", help="plan a multi-stop Aerial-Ground A* path through a scene and write the mission",
                        description="Plan start -> goal1 -> goal2 ... on the scene's grid and write the mission JSON.")
     p.add_argument("scene", type=Path, help="scene JSON (world frame)")
     p.add_argument("--start", type=_vec3("--start"), required=True, help="start 'x,y,z' [m] (world frame)")
-    p.add_argument("--goal", type=_vec3("--goal"), action="append", required=True,
+    p.add_argument("--goal", type=_vec3("--goal"), action="append",
                    help="goal 'x,y,z' [m]; repeat for stops")
+    p.add_argument("--goal-object", type=object_stop, action="append", dest="goal", metavar="ID_OR_LABEL",
+                   help="a stop beside an object, by id or label (e.g. 'robot dog'); mixes with --goal in order")
     p.add_argument("--out", default="mission.json", help="mission JSON to write (default mission.json)")
     _add_planner_args(p)
     p.set_defaults(func=cmd_plan)
@@ -220,9 +228,10 @@ def build_parser() -> argparse.ArgumentParser:
 def _extra_commands() -> list[Callable[[argparse._SubParsersAction], None]]:  # type: ignore[type-arg]
     """Subcommands whose parsers live beside the code they run."""
     from console.console_cmd import add_console_parser
+    from console.describe_cmd import add_describe_parser
     from pipeline.cli_commands import add_bench_parser, add_map_parser
 
-    return [add_console_parser, add_map_parser, add_bench_parser]
+    return [add_console_parser, add_map_parser, add_bench_parser, add_describe_parser]
 
 
 def main(argv: Sequence[str] | None = None) -> int:
