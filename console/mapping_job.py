@@ -27,7 +27,7 @@ from pipeline.scene import Scene
 
 from .link.base import CaptureResult
 
-from .session import CaptureRecord, Detection, JobStatus, Session
+from .session import CaptureRecord, Detection, JobStatus, Session, SessionError
 
 log = logging.getLogger(__name__)
 
@@ -149,6 +149,7 @@ class MappingJob:
             n = len(result.scene.objects)
             self._report(0.88, f"spawning {n} objects, rebuilding the grid, replanning")
             timings = {"capture": t_capture, **result.timings}
+            self._session.check_plausible(result.scene, f"capture {cap_id} refused")  # before anything is shown
             self._session.set_capture(CaptureRecord(
                 id=cap_id, image=shot.image, intrinsics=shot.intrinsics, camera_pose=shot.camera_pose,
                 robot_pose=shot.robot_pose, detections=result.detections, depth=result.depth,
@@ -162,7 +163,7 @@ class MappingJob:
             body = summary + ("; " + "; ".join(report.notes) if report.notes else "")
             self._session.notify("Mapped", body, "success")
             return True
-        except MappingError as exc:
+        except (MappingError, SessionError) as exc:  # SessionError: e.g. an implausible object refused
             self._session.set_job(JobStatus(JOB_NAME, False, 0.0, "failed", str(exc)))
             self._session.notify("Capture & map failed", str(exc), "error")
             return False

@@ -279,3 +279,29 @@ def test_history_is_bounded_and_a_capture_with_its_spawn_is_one_step() -> None:
     assert h.pop() is None
     with pytest.raises(ValueError):
         History(depth=0)
+
+
+def test_a_capture_with_an_implausible_object_is_refused_before_anything_changes(planned: Session) -> None:
+    from console.link.base import CaptureResult
+    from console.mapping_job import MappingJob, Perception
+    from pipeline.geometry import CameraMount, camera_pose_in_world
+
+    class Huge:
+        label = "huge"
+
+        def perceive(self, shot, capture_id, progress):  # type: ignore[no-untyped-def]
+            scene = Scene(objects=(SceneObject("wall", "wall", (2.5, 2.0, 1.0), (0.2, 2.0, 900.0)),))
+            return Perception(scene, (), None, {})
+
+    def shot() -> CaptureResult:
+        robot = Pose.from_xyz_yaw(*START)
+        return CaptureResult(np.zeros((24, 32, 3), np.uint8), Intrinsics(30.0, 30.0, 16.0, 12.0, 32, 24),
+                             camera_pose_in_world(robot, CameraMount()), robot)
+
+    notices = _Notices(planned)
+    before = planned.scene
+    assert MappingJob(planned, shot, Huge()).run() is False
+    err = planned.job.error or ""
+    assert "refused" in err and "objects[0].size[2]: 900 m is implausible" in err and "internal error" not in err
+    assert notices.titled("Capture & map failed")
+    assert planned.scene is before and planned.capture is None and planned.mission is not None
