@@ -220,7 +220,7 @@ class ConsoleApp:
                 pose=st.pose, mode=getattr(st.mode, "value", str(st.mode)), armed=bool(st.armed),
                 battery=st.battery, healthy=bool(st.link_ok),
                 detail="" if st.health in ("", "ok") else str(st.health), stamp=float(st.time),
-                messages=messages,
+                messages=messages, landed=getattr(st, "landed", None),
             ))
             with seen_lock:  # state arrives from the link's thread and from connect()
                 fresh = [text for number, text in messages if number > seen[0]]
@@ -288,7 +288,10 @@ class ConsoleApp:
 
         paths_holder: dict[str, PathsView] = {}
         gui.add_html(page_style(RIGHT_PANEL_PX))  # notifications bottom right; the "disconnected" banner
-        self.views["robot"] = RobotView(server, session, self.config.robot)
+        from .vehicle_commands import VehicleCommands
+
+        self.views["robot"] = RobotView(server, session, self.config.robot,
+                                        commands=VehicleCommands(session, self.link, self.runner))
         # the mission and its run controls right under the robot status: both stay in sight at 1440 x 900
         with gui.add_folder("Mission"):
             self.views["mission"] = MissionView(server, session, self.runner)

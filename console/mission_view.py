@@ -18,7 +18,7 @@ from planner.mission import Mission, SegmentKind
 from .client_notice import tell
 from .paths_view import KIND_RGB
 from .wording import plural
-from .session import MISSION, RUN, RunStatus, Session, SessionError
+from .session import MISSION, ROBOT, ROUTE, RUN, RunStatus, Session, SessionError
 
 
 class MissionRunner(Protocol):
@@ -80,7 +80,12 @@ class MissionView:
         build = gui.add_button("Build mission", icon=viser.Icon.ROUTE,
                                hint="Split the green path into walk / take-off / fly / land segments")
         self._table = gui.add_markdown("<small>No mission yet: register a path, then Build mission.</small>")
+        self._replan = gui.add_button("Re-plan from the robot", color="orange", icon=viser.Icon.ROUTE, visible=False,
+                                      hint="Plan every registered goal again from where the robot is now")
+        self._landing = gui.add_button("Add landing", color="orange", icon=viser.Icon.ARROW_BAR_TO_DOWN, visible=False,
+                                       hint="The mission ends in the air: land straight below its last goal")
         self._execute = gui.add_button("Execute", color="green", icon=viser.Icon.PLAYER_PLAY, disabled=True)
+        self._why = gui.add_markdown("")
         self._pause = gui.add_button("Pause", color="yellow", icon=viser.Icon.PLAYER_PAUSE, disabled=True, visible=False)
         self._resume = gui.add_button("Resume", color="teal", icon=viser.Icon.PLAYER_PLAY, disabled=True, visible=False)
         self._abort = gui.add_button("Abort", color="red", icon=viser.Icon.PLAYER_STOP, disabled=True, visible=False)
@@ -88,6 +93,9 @@ class MissionView:
         self._status = gui.add_markdown("")
         build.on_click(self._on_build)
         self._execute.on_click(self._on_execute)
+        self._replan.on_click(lambda e: self._act(e, "Re-planned", self._session.replan_from_robot))
+        self._landing.on_click(lambda e: self._act(e, "Landing added", self._session.add_landing))
+        self._shown: tuple[Any, ...] | None = None
         self._pause.on_click(lambda e: self._call(e, "pause"))
         self._resume.on_click(lambda e: self._call(e, "resume"))
         self._abort.on_click(lambda e: self._call(e, "abort"))
@@ -95,8 +103,25 @@ class MissionView:
         self.refresh()
 
     def _on_event(self, topic: str, _payload: Any) -> None:
-        if topic in (MISSION, RUN):
+        if topic in (MISSION, RUN, ROUTE):
             self.refresh()
+        elif topic == ROBOT and self._rules_changed():
+            self.refresh()
+
+    def _rules_changed(self) -> bool:
+        """Whether what the operator rules say changed (robot states arrive at tens of Hz)."""
+        view = self._session.operator_state(self._runner is not None)
+        key = (view.execute_blocker, view.route_note, view.resume_blocker, view.air_end)
+        return key != self._shown
+
+    def _act(self, event: Any, title: str, action: Any) -> None:
+        try:
+            out = action()
+        except SessionError as exc:
+            tell(event.client, f"{title.split()[0]}: not done", str(exc), "yellow")
+            return
+        tell(event.client, title, out if isinstance(out, str) else f"mission {out.id}: {', '.join(out.kinds())}",
+             "green")
 
     def _on_build(self, event: Any) -> None:
         try:
@@ -115,8 +140,9 @@ class MissionView:
         if self._runner is None:
             tell(event.client, "Cannot execute", "this robot link has no mission manager", "red")
             return
-        if self._session.run.active:
-            tell(event.client, "Already running", "pause or abort the running mission first", "yellow")
+        why = self._session.operator_state().execute_blocker
+        if why is not None:
+            tell(event.client, "Cannot execute", why, "yellow")
             return
         try:
             self._runner.execute(mission)
@@ -140,13 +166,26 @@ class MissionView:
                 self._table.content = "<small>No mission yet: register a path, then <b>Build mission</b>.</small>"
             else:
                 self._table.content = segment_table(mission, run.segment if run.active else None)
-            can_run = self._runner is not None
+            view = self._session.operator_state(self._runner is not None)
+            self._shown = (view.execute_blocker, view.route_note, view.resume_blocker, view.air_end)
             self._execute.visible = not run.active
-            self._execute.disabled = not (can_run and mission is not None)
+            self._execute.disabled = view.execute_blocker is not None
+            notes = []
+            if view.execute_blocker is not None and not run.active and mission is not None:
+                notes.append(f"Execute is off: {view.execute_blocker}")
+            elif view.route_note is not None:
+                notes.append(view.route_note)
+            if view.air_end is not None:
+                notes.append(f"⚠ the mission ends hovering {view.air_end:.1f} m above the floor: add a landing")
+            if view.resume_blocker is not None:
+                notes.append(view.resume_blocker)
+            self._why.content = "".join(f"<small style='color:#b35c00'>{html.escape(n)}</small><br>" for n in notes)
+            self._replan.visible = view.route_note is not None
+            self._landing.visible = view.air_end is not None and not run.active
             self._pause.visible = run.state == "running"
             self._pause.disabled = run.state != "running"
-            self._resume.visible = run.state in ("paused", "failsafe")
-            self._resume.disabled = run.state not in ("paused", "failsafe")
+            self._resume.visible = run.state in ("paused", "failsafe") and view.resume_blocker is None
+            self._resume.disabled = run.state not in ("paused", "failsafe") or view.resume_blocker is not None
             self._abort.visible = run.active
             self._abort.disabled = not run.active
             self._progress.visible = run.state != "idle"
@@ -154,7 +193,8 @@ class MissionView:
             self._progress.animated = run.state == "running"
             colors = {"done": "green", "aborted": "gray", "failed": "red", "paused": "yellow", "failsafe": "red"}
             self._progress.color = colors.get(run.state, "blue")
-            self._status.content = (f"<small><b>{html.escape(run.state)}</b>"
+            doing = f"{view.running}: " if view.running else ""
+            self._status.content = (f"<small>{html.escape(doing)}<b>{html.escape(run.state)}</b>"
                                     f"{' · ' + html.escape(run.message) if run.message else ''}</small>"
                                     if run.state != "idle" else "")
 
@@ -172,9 +212,16 @@ class ManagerRunner:
         self._session = session
         self._last_state = ""
         self.unsubscribe = manager.subscribe(self._on_event)
+        session.attach_runner(self.abort)
 
-    def execute(self, mission: Mission) -> None:
-        self.manager.start(mission)
+    def execute(self, mission: Mission, command: str = "") -> None:
+        """Run ``mission`` (``command``: the vehicle command it carries out, or "" for the operator's)."""
+        self._session.mission_started(mission, command)
+        try:
+            self.manager.start(mission)
+        except Exception:
+            self._session.mission_not_started(mission.id)
+            raise
 
     def pause(self) -> None:
         self.manager.pause()
@@ -197,9 +244,8 @@ class ManagerRunner:
             self._session.notify("Mission", event.message, event.level)
         if state != self._last_state:
             self._last_state = state
-            if state == "done":
-                self._session.complete_mission()
-                self._session.notify("Mission done", "the route now starts where the robot stands", "success")
+            if state in ("done", "aborted"):
+                self._session.mission_finished(state, p.mission_id)
 
 
 def make_runner(link: Any, session: Session, *, failsafe_after: float = 3.0,

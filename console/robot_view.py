@@ -17,7 +17,9 @@ import numpy as np
 import trimesh
 import viser
 
-from .session import ROBOT, RobotSnapshot, Session
+from .client_notice import tell
+from .session import ROBOT, RUN, RobotSnapshot, Session, SessionError
+from .vehicle_commands import LABELS, VehicleCommands
 from .wording import mode_text
 
 BODY_RGB = (60, 66, 78)
@@ -105,15 +107,30 @@ class RobotView:
         server: The viser server.
         session: The state it shows.
         link_name: How the robot link is called (``sim``, ``mavlink:...``).
+        commands: The vehicle commands (Hold, Land here, Return, Disarm) shown under the status
+            line whenever the robot is armed or off the ground; ``None``: no buttons.
     """
 
-    def __init__(self, server: viser.ViserServer, session: Session, link_name: str) -> None:
+    def __init__(self, server: viser.ViserServer, session: Session, link_name: str,
+                 commands: VehicleCommands | None = None) -> None:
         self._server = server
         self._session = session
         self._link_name = link_name
         self._lock = threading.Lock()
         self._last = 0.0
         self._status = server.gui.add_markdown(status_text(None, link_name))
+        self._commands = commands
+        self._buttons: dict[str, Any] = {}
+        self._shown_commands: Any = None
+        if commands is not None:
+            icons = {"hold": viser.Icon.PLAYER_PAUSE, "land": viser.Icon.ARROW_BAR_TO_DOWN, "return": viser.Icon.HOME,
+                     "disarm": viser.Icon.POWER}
+            colors = {"hold": "yellow", "land": "orange", "return": "blue", "disarm": "gray"}
+            for name, label in LABELS.items():
+                b = server.gui.add_button(label, color=colors[name], icon=icons[name], visible=False,
+                                          hint=f"Vehicle command: {label}")
+                b.on_click(lambda e, n=name: self._on_command(e, n))
+                self._buttons[name] = b
         self._frame = server.scene.add_frame("/robot", show_axes=False, visible=False)
         server.scene.add_mesh_trimesh("/robot/twin", robot_mesh())
         self._label = server.scene.add_label("/robot/label", "robot", position=(0.0, 0.0, 0.55),
@@ -125,6 +142,33 @@ class RobotView:
     def _on_event(self, topic: str, payload: Any) -> None:
         if topic == ROBOT and payload is not None:
             self.show(payload)
+        if topic in (ROBOT, RUN):
+            self._show_commands()
+
+    def _on_command(self, event: Any, name: str) -> None:
+        assert self._commands is not None
+        try:
+            message = self._commands.run(name)
+        except SessionError as exc:
+            tell(event.client, f"{LABELS[name]}: not done", str(exc), "yellow")
+            return
+        tell(event.client, LABELS[name], message, "blue")
+
+    def _show_commands(self) -> None:
+        """Show the vehicle commands the session's rules allow now (only when that changes)."""
+        if not self._buttons:
+            return
+        states = self._session.operator_state().commands
+        key = tuple(sorted((n, c.shown, c.enabled, c.reason) for n, c in states.items()))
+        with self._lock:
+            if key == self._shown_commands:
+                return
+            self._shown_commands = key
+            for name, button in self._buttons.items():
+                c = states[name]
+                button.visible = c.shown
+                button.disabled = not c.enabled
+                button.hint = f"Vehicle command: {LABELS[name]}" + (f" (not now: {c.reason})" if c.reason else "")
 
     def show(self, r: RobotSnapshot, force: bool = False) -> None:
         """Move the twin to ``r.pose`` (throttled) and refresh the status line."""

@@ -42,6 +42,7 @@ from pipeline.scene import SceneError, check_plausible
 from .capture_files import CAPTURE_DIR
 from .history import History, SceneState
 from .merge import merge_observations
+from .operator_session import OperatorRules
 from .picking import goal_on_plane, ray_plane
 from .session_store import SESSION_FILE, SESSION_VERSION, Persistence
 from .session_types import (
@@ -62,7 +63,7 @@ __all__ = [
 log = logging.getLogger(__name__)
 
 
-class Session(Persistence):
+class Session(Persistence, OperatorRules):
     """All console state, thread-safe, observable, persisted in one folder (see :class:`Persistence`).
 
     Args:
@@ -249,6 +250,9 @@ class Session(Persistence):
         with self._lock:
             if self._run.active:
                 return PlanResult(False, "a mission is under way (running or paused): abort it, or wait until it is done, before planning")
+            why = self._goal_problem_locked(g)  # type: ignore[arg-type]
+            if why is not None:
+                return PlanResult(False, why)
             res = self._route.propose(g)
             if res.ok:
                 self._save_locked()
@@ -303,10 +307,7 @@ class Session(Persistence):
         with self._lock:
             if not self._route.registered:
                 raise SessionError("register at least one path segment before building the mission")
-            try:
-                mission = self._route.mission()
-            except MissionError as exc:
-                raise SessionError(f"cannot build the mission: {exc}") from None
+            mission = self._build_locked()  # may start in the air (console.operator_state)
             self._mission = mission
             self._save_locked()
         self._emit([(MISSION, None)])
@@ -391,7 +392,7 @@ class Session(Persistence):
         self._scene = scene
         self._grid = grid
         notes = self._route.set_grid(grid)
-        self._mission = None
+        self._mission = self._mission_after_edit_locked()
         kept = len(self._route.registered)
         if kept < len(goals):
             segs = f"segment {kept + 1}" if kept + 1 == len(goals) else f"segments {kept + 1}-{len(goals)}"
@@ -448,22 +449,8 @@ class Session(Persistence):
         self._emit([(ROUTE, None), (MISSION, None)])
 
     def _sync_start_locked(self) -> bool:
-        """Move the route start under the robot when nothing is registered; True if moved."""
-        r = self._robot
-        if r is None or self._route.registered or self._run.active:
-            return False
-        x, y, z = r.pose.translation
-        ws = self._workspace
-        if z - ws.floor > ws.resolution or not ws.contains((x, y, ws.floor)):
-            return False  # in the air or outside: keep the last start
-        s = self._route.start
-        if math.dist((x, y), s[:2]) < ws.resolution / 2:
-            return False
-        goal = self._route.candidate_goal
-        self._route.set_start((x, y, ws.floor))
-        if goal is not None:
-            self._route.propose(goal)
-        return True
+        """The route starts at the robot (rules in :mod:`console.operator_state`); True if it changed."""
+        return self._follow_robot_locked()
 
     # --- undo ------------------------------------------------------------------------------------
     def _remember_locked(self, label: str, key: str = "") -> None:

@@ -95,6 +95,8 @@ class RobotSnapshot:
         detail: Free text from the link (e.g. the failing check).
         stamp: Time of the report [s since the epoch].
         messages: The robot's latest status messages, oldest first, ``(number, "SEVERITY: text")``.
+        landed: Whether the robot stands on the ground as the link reports it, or ``None`` when
+            unknown (the rules then judge by its height).
     """
 
     pose: Pose
@@ -105,6 +107,7 @@ class RobotSnapshot:
     detail: str = ""
     stamp: float = field(default_factory=time.time)
     messages: tuple[tuple[int, str], ...] = ()
+    landed: bool | None = None
 
 
 @dataclass(frozen=True)

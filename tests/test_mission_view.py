@@ -8,7 +8,8 @@ import pytest
 import viser
 
 from console.mission_view import MissionView, segment_table
-from console.session import RunStatus, Session
+from console.session import RobotSnapshot, RunStatus, Session
+from pipeline.geometry import Pose
 
 
 class _Runner:
@@ -38,6 +39,7 @@ def test_buttons_follow_the_run_state(server: viser.ViserServer, tmp_path: Path)
     session = Session(tmp_path / "session", start=(2.5, 0.7, 0.0), autosave=False)
     view = MissionView(server, session, _Runner())
     assert _shown(view) == {"execute": False, "pause": False, "resume": False, "abort": False}  # no mission yet
+    session.set_robot(RobotSnapshot(Pose.from_xyz_yaw(2.5, 0.7, 0.0), mode="idle"))  # Execute needs the robot
 
     session.add_goal((2.5, 2.0, 0.0))
     session.register()

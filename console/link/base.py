@@ -406,6 +406,14 @@ class RobotLink(abc.ABC):
     def abort(self) -> None:
         """Stop the running segment (finishes as ``ABORTED``) and hold position."""
 
+    def disarm(self) -> None:
+        """Stop the motors of a robot standing on the ground (idempotent when already disarmed).
+
+        Raises :class:`LinkError` when the robot is in the air or a segment runs, or when the link
+        cannot disarm; implementations override this default, which refuses.
+        """
+        raise LinkError(f"{self.description}: this robot link cannot disarm")
+
     def land_here(self, floor: float = 0.0) -> SegmentRun:
         """Land straight down from where the robot is (failsafe use); ``floor`` = world z [m]."""
         from planner.mission import SegmentKind

@@ -545,6 +545,17 @@ class SimRobot(RobotLink):
             state = self._state()
         self._stream.publish(state)
 
+    def disarm(self) -> None:
+        self._require_link()
+        with self._lock:
+            if not self._landed:
+                raise LinkError(f"cannot disarm in the air ({self._pos[2]:.2f} m): land first")
+            if self._run is not None and not self._run.done:
+                raise LinkError(f"cannot disarm: a {self._run.segment.kind.value} segment is running")
+            self._armed = False
+            state = self._state()
+        self._stream.publish(state)
+
     def _stop_motion(self, status: RunStatus, why: str, say: bool = True) -> None:
         if self._phases and self._phases[0].kind == "spool":
             self._armed = False  # never lifted off
