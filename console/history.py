@@ -2,7 +2,7 @@
 
 Before each spawn, move, delete, capture or load the session pushes a :class:`SceneState` (the
 scene, its planning grid, the route as saved, the mission, the last capture); :meth:`History.pop`
-hands back the newest one for the session to put back. Everything held is immutable or a copy, so
+hands back the newest one, and :class:`Undo` (mixed into the session) puts it back. Everything held is immutable or a copy, so
 a state stays valid however the session changes afterwards. All positions are world frame [m].
 """
 
@@ -10,13 +10,18 @@ from __future__ import annotations
 
 from collections import deque
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from pipeline.scene import Scene
 from planner.grid import PlanningGrid
 from planner.mission import Mission
+from planner.route import Route
 
-from .session_types import CaptureRecord
+from .session_types import CaptureRecord, SessionError
+from .topics import CAPTURE, GRID, MISSION, ROUTE, SCENE, SELECTION
+
+if TYPE_CHECKING:
+    from .session import Session
 
 HISTORY_DEPTH = 20
 """How many edits can be undone, newest first."""
@@ -74,3 +79,44 @@ class History:
 
     def clear(self) -> None:
         self._states.clear()
+
+
+class Undo:
+    """The undo half of :class:`~console.session.Session` (mixed into it; uses its lock and state)."""
+
+    def _remember_locked(self: "Session", label: str, key: str = "") -> None:
+        """Push the state before an edit."""
+        self._history.push(SceneState(label, self._scene, self._grid, self._route.to_dict(), self._mission,
+                                      self._capture, self._capture_meta, key))
+
+    @property
+    def undo_label(self: "Session") -> str | None:
+        """What :meth:`undo_edit` would undo (``move box-3``), or ``None`` when there is nothing."""
+        with self._lock:
+            top = self._history.peek()
+            return None if top is None else top.label
+
+    def undo_edit(self: "Session") -> str:
+        """Put the map back as it was before the last spawn, move, delete, capture or load.
+
+        Scene, grid, registered route, mission and last capture come back together; the route start
+        then follows the robot as after any change. Returns what was undone.
+        """
+        with self._lock:
+            if self._run.active:
+                raise SessionError("a mission is under way (running or paused): abort it before undoing map edits")
+            state = self._history.pop()
+            if state is None:
+                raise SessionError("nothing to undo: no map edit since the console started")
+            route = Route(state.grid, self._route.start, self._weights)
+            route.restore(state.route)
+            self._scene, self._grid, self._route, self._mission = state.scene, state.grid, route, state.mission
+            self._capture, self._capture_meta = state.capture, state.capture_meta
+            if self._selected is not None and self._selected not in {o.id for o in state.scene.objects}:
+                self._selected = None
+            self._sync_start_locked()
+            self._save_locked()
+            cap, selected = self._capture, self._selected
+        self._emit([(SCENE, None), (GRID, None), (ROUTE, None), (MISSION, None), (SELECTION, selected)]
+                   + ([(CAPTURE, cap)] if cap is not None else []))
+        return f"undone: {state.label}"

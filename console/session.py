@@ -40,7 +40,7 @@ from planner.route import PlanResult, Route, path_points
 from pipeline.scene import SceneError, check_plausible
 
 from .capture_files import CAPTURE_DIR
-from .history import History, SceneState
+from .history import History, Undo
 from .merge import merge_observations
 from .operator_session import OperatorRules
 from .picking import goal_on_plane, ray_plane
@@ -63,7 +63,7 @@ __all__ = [
 log = logging.getLogger(__name__)
 
 
-class Session(Persistence, OperatorRules):
+class Session(Persistence, Undo, OperatorRules):
     """All console state, thread-safe, observable, persisted in one folder (see :class:`Persistence`).
 
     Args:
@@ -451,44 +451,6 @@ class Session(Persistence, OperatorRules):
     def _sync_start_locked(self) -> bool:
         """The route starts at the robot (rules in :mod:`console.operator_state`); True if it changed."""
         return self._follow_robot_locked()
-
-    # --- undo ------------------------------------------------------------------------------------
-    def _remember_locked(self, label: str, key: str = "") -> None:
-        """Push the state before an edit (see :mod:`console.history`)."""
-        self._history.push(SceneState(label, self._scene, self._grid, self._route.to_dict(), self._mission,
-                                      self._capture, self._capture_meta, key))
-
-    @property
-    def undo_label(self) -> str | None:
-        """What :meth:`undo_edit` would undo (``move box-3``), or ``None`` when there is nothing."""
-        with self._lock:
-            top = self._history.peek()
-            return None if top is None else top.label
-
-    def undo_edit(self) -> str:
-        """Put the map back as it was before the last spawn, move, delete, capture or load.
-
-        Scene, grid, registered route, mission and last capture come back together; the route start
-        then follows the robot as after any change. Returns what was undone.
-        """
-        with self._lock:
-            if self._run.active:
-                raise SessionError("a mission is under way (running or paused): abort it before undoing map edits")
-            state = self._history.pop()
-            if state is None:
-                raise SessionError("nothing to undo: no map edit since the console started")
-            route = Route(state.grid, self._route.start, self._weights)
-            route.restore(state.route)
-            self._scene, self._grid, self._route, self._mission = state.scene, state.grid, route, state.mission
-            self._capture, self._capture_meta = state.capture, state.capture_meta
-            if self._selected is not None and self._selected not in {o.id for o in state.scene.objects}:
-                self._selected = None
-            self._sync_start_locked()
-            self._save_locked()
-            cap = self._capture
-        self._emit([(SCENE, None), (GRID, None), (ROUTE, None), (MISSION, None), (SELECTION, self._selected)]
-                   + ([(CAPTURE, cap)] if cap is not None else []))
-        return f"undone: {state.label}"
 
     def _floor_point(self, p: Sequence[float]) -> Vec3:
         return (float(p[0]), float(p[1]), self._workspace.floor)
