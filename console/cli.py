@@ -229,9 +229,9 @@ def _extra_commands() -> list[Callable[[argparse._SubParsersAction], None]]:  # 
     """Subcommands whose parsers live beside the code they run."""
     from console.console_cmd import add_console_parser
     from console.describe_cmd import add_describe_parser
-    from pipeline.cli_commands import add_bench_parser, add_map_parser
+    from pipeline.cli_commands import add_bench_parser, add_calibrate_parser, add_map_parser
 
-    return [add_console_parser, add_map_parser, add_bench_parser, add_describe_parser]
+    return [add_console_parser, add_map_parser, add_bench_parser, add_describe_parser, add_calibrate_parser]
 
 
 def main(argv: Sequence[str] | None = None) -> int:

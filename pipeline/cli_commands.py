@@ -17,7 +17,8 @@ from pipeline.catalog import Catalog, CatalogError
 from pipeline.mapper import MapperConfig, load_mapping_models
 from pipeline.option_values import OptionError, add_model_dir_option, check_model_dir
 
-__all__ = ["add_bench_parser", "add_map_parser", "cmd_bench", "cmd_map", "load_mapping_models"]
+__all__ = ["add_bench_parser", "add_calibrate_parser", "add_map_parser", "cmd_bench", "cmd_calibrate", "cmd_map",
+           "load_mapping_models"]
 
 
 class _UserError(Exception):
@@ -216,4 +217,85 @@ def add_bench_parser(subparsers: Any) -> argparse.ArgumentParser:
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     _add_common(p)
     p.set_defaults(func=_run(cmd_bench, "bench"))
+    return p
+
+
+# --- calibrate -------------------------------------------------------------------------------------
+
+PHOTO_SUFFIXES = (".jpg", ".jpeg", ".png", ".bmp", ".tif", ".tiff", ".webp")
+
+
+def _board_size(text: str) -> tuple[int, int]:
+    parts = text.lower().replace(" ", "").split("x")
+    if len(parts) != 2 or not all(p.isdigit() for p in parts):
+        raise argparse.ArgumentTypeError(f"--board: expected COLSxROWS such as 9x6, got {text!r}")
+    return int(parts[0]), int(parts[1])
+
+
+def _calibration_photos(paths: list[Path]) -> list[Path]:
+    files: list[Path] = []
+    for p in paths:
+        if p.is_dir():
+            files.extend(sorted(f for f in p.iterdir() if f.suffix.lower() in PHOTO_SUFFIXES))
+        elif p.is_file():
+            files.append(p)
+        else:
+            raise _UserError(f"{p}: no such file or folder")
+    if not files:
+        raise _UserError(f"no photos ({', '.join(PHOTO_SUFFIXES)}) in {', '.join(str(p) for p in paths)}")
+    return files
+
+
+def cmd_calibrate(args: argparse.Namespace) -> int:
+    """``morphonavi calibrate PHOTOS... --board 9x6 --square 0.025 [--charuco ...] --out camera.toml``."""
+    from pipeline.calibration import Board, CalibrationError, calibrate
+    from pipeline.camera_file import write_camera_toml
+    from pipeline.image_io import read_image
+
+    out = Path(args.out)
+    if out.is_dir():
+        raise _UserError(f"--out {out} is a directory; give a file name such as {out / 'camera.toml'}")
+    if not out.parent.is_dir():
+        raise _UserError(f"--out {out}: the folder {out.parent} does not exist")
+    try:
+        board = Board("charuco" if args.charuco else "chessboard", args.board[0], args.board[1], args.square,
+                      args.marker if args.charuco else 0.0, args.dictionary)
+    except CalibrationError as exc:
+        raise _UserError(str(exc)) from None
+    photos = []
+    for f in _calibration_photos(args.photos):
+        loaded = read_image(f, name=f.name)
+        if loaded.note:
+            print(loaded.note)
+        photos.append((f.name, loaded.image))
+    try:
+        cal = calibrate(photos, board, min_views=args.min_views)
+    except CalibrationError as exc:
+        raise _UserError(str(exc)) from None
+    print(cal.report())
+    facts = {"rms_px": round(cal.rms, 4), "views": len(cal.per_view), "board": f"{board.kind} {board.cols}x{board.rows}",
+             "square_m": board.square}
+    write_camera_toml(out, cal.intrinsics, None, facts)
+    print(f"camera file written to {out} (add its [mount] section: where the camera sits on the robot)")
+    return 0
+
+
+def add_calibrate_parser(subparsers: Any) -> argparse.ArgumentParser:
+    """Register ``morphonavi calibrate``."""
+    p = subparsers.add_parser(
+        "calibrate", help="camera intrinsics and distortion from chessboard or ChArUco photos (writes camera.toml)",
+        description="Find the board in every photo (files or folders), calibrate with OpenCV, print the RMS and "
+                    "per-view reprojection errors and write camera.toml for the upright photo size. Refuses "
+                    "too few views and views that leave the focal length undetermined.",
+    )
+    p.add_argument("photos", nargs="+", type=Path, help="photos of the board, or folders of them (one camera, one size)")
+    p.add_argument("--board", type=_board_size, default=(9, 6), metavar="COLSxROWS",
+                   help="chessboard: INNER corners (a 10 x 7 squares board is 9x6, the default); ChArUco: squares")
+    p.add_argument("--square", type=float, default=0.025, help="side of one square [m] (default 0.025)")
+    p.add_argument("--charuco", action="store_true", help="the board is a ChArUco board (needs --marker)")
+    p.add_argument("--marker", type=float, default=0.0, help="ChArUco: side of one marker [m]")
+    p.add_argument("--dictionary", default="DICT_5X5_100", help="ChArUco: ArUco dictionary (default DICT_5X5_100)")
+    p.add_argument("--min-views", type=int, default=5, help="fewest photos with the board found (default 5)")
+    p.add_argument("--out", default="camera.toml", help="camera file to write (default camera.toml)")
+    p.set_defaults(func=_run(cmd_calibrate, "calibrate"))
     return p
