@@ -150,8 +150,8 @@ def _is_number(v: Any) -> bool:
     return isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
 
 
-def check_route(route: Any) -> None:
-    """Check a saved ``route`` entry; raises :class:`SceneError` naming the bad field."""
+def check_route(route: Any, workspace: Workspace | None = None) -> None:
+    """Check a saved ``route`` entry (points inside ``workspace``); raises :class:`SceneError` naming the bad field."""
     if not isinstance(route, dict):
         raise SceneError("route", f"must be an object, got {type(route).__name__}")
     _check_finite(route, "route")
@@ -171,6 +171,10 @@ def check_route(route: Any) -> None:
     goal = route.get("candidate_goal")
     if goal is not None and (not isinstance(goal, list) or len(goal) != 3 or not all(_is_number(v) for v in goal)):
         raise SceneError("route.candidate_goal", f"must be 3 finite numbers [m] or null, got {goal!r}")
+    if workspace is not None:
+        for name, p in (("start", start), ("candidate_goal", goal)):
+            if p is not None and not workspace.contains(p):
+                raise SceneError(f"route.{name}", f"{p} lies outside the workspace {list(workspace.min)}..{list(workspace.max)} [m]")
 
 
 @dataclass(frozen=True)
@@ -224,7 +228,7 @@ def parse_saved(data: Any, where: str, workspace: Workspace | None = None) -> Sa
     route_raw = data.get("route")
     if route_raw is not None:
         try:
-            check_route(route_raw)
+            check_route(route_raw, workspace)
             route = route_raw
         except SceneError as exc:
             problems.append(f"{exc}: the route was not restored")
@@ -242,6 +246,8 @@ def parse_saved(data: Any, where: str, workspace: Workspace | None = None) -> Sa
             problems.append(f"{exc}: the mission was not restored (build it again)")
         except MissionError as exc:
             problems.append(f"mission.{exc}: the mission was not restored (build it again)")
+        except (TypeError, ValueError) as exc:  # e.g. a 'created' time that is not a number
+            problems.append(f"mission: {exc}: the mission was not restored (build it again)")
     if mission is not None and route is None:
         mission = None
         notes.append("the mission was dropped with its route")
@@ -459,7 +465,7 @@ class Persistence:
                 try:
                     self._capture = read_capture_files(self.folder, saved.last_capture)
                     self._capture_meta = saved.last_capture
-                except (KeyError, TypeError, ValueError, OSError) as exc:
+                except (KeyError, TypeError, ValueError, AttributeError, OSError) as exc:
                     notes.append(f"the last capture could not be restored: {exc}")
             self._save_locked()
         return notes

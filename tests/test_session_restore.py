@@ -229,3 +229,41 @@ def test_autosave_failures_are_told_once_and_shown_until_saving_works_again(tmp_
     assert [n.title for n in told] == ["Changes are not being saved", "Saving again"]
     assert s.save_error is None and not s.status_text()[1]
     assert len(json.loads((s.folder / "session.json").read_text())["scene"]["objects"]) == 7
+
+
+def _paths(d, p=()):
+    yield p
+    if isinstance(d, dict):
+        for k, v in d.items():
+            yield from _paths(v, p + (k,))
+    elif isinstance(d, list):
+        for i, v in enumerate(d[:2]):
+            yield from _paths(v, p + (i,))
+
+
+def test_any_field_of_a_saved_session_replaced_by_nonsense_is_refused_or_dropped_never_raised(tmp_path: Path) -> None:
+    """Every field (and sub-field) of a full session file swapped for a wrong type or a huge number:
+    loading it either refuses with SessionError or restores with notes; never a raw exception."""
+    from tests.test_session_safety import _capture
+
+    folder = tmp_path / "s"
+    _saved_session(folder)
+    s = Session(folder, start=START)
+    s.restore_last()
+    s.set_capture(_capture("c1"))
+    base = json.loads((folder / "session.json").read_text())
+    cases = 0
+    for path in list(_paths(base))[1:]:
+        for bad in ("x", None, 1e308):
+            data = json.loads(json.dumps(base))
+            node = data
+            for key in path[:-1]:
+                node = node[key]
+            node[path[-1]] = bad
+            (folder / "fuzz.json").write_text(json.dumps(data))
+            cases += 1
+            try:
+                s.load("fuzz")
+            except SessionError:
+                pass
+    assert cases > 200
