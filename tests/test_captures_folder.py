@@ -117,3 +117,23 @@ def test_per_photo_gravity_and_height_give_the_cameras_mount(tmp_path: Path) -> 
     assert np.allclose(back, g, atol=1e-9)
     level = mount_from_gravity((0.0, 1.0, 0.0), 0.35)
     assert level.pitch == pytest.approx(0.0) and level.roll == pytest.approx(0.0)
+
+
+def test_the_console_uses_the_photos_own_camera_pose(tmp_path: Path) -> None:
+    """A real photo taken from 1.2 m with a downward tilt is placed with that pose, not the robot's mount."""
+    from console.link.sim import SimRobot
+
+    truth = CameraMount((0.0, 0.0, 1.2), math.radians(30.0), 0.0, 0.0)
+    g = truth.pose.rotation.inv().apply([0.0, 0.0, -1.0])
+    _photo(tmp_path, "a", 64, 48, meta={"gravity_cam": list(g), "camera_height": 1.2})
+    _photo(tmp_path, "b", 64, 48)  # no pose of its own: the robot's mount
+    robot = SimRobot(captures=tmp_path, manual_clock=True)
+    robot.connect()
+    try:
+        a, b = robot.capture(), robot.capture()
+    finally:
+        robot.close()
+    assert a.camera_pose.translation[2] == pytest.approx(1.2)
+    forward = a.camera_pose.rotation.apply([0.0, 0.0, 1.0])  # the optical axis in the world
+    assert math.degrees(math.asin(-forward[2])) == pytest.approx(30.0, abs=1e-6)
+    assert b.mount == robot.mount and b.camera_pose.translation[2] == pytest.approx(robot.mount.position[2])

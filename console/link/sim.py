@@ -150,7 +150,8 @@ class SimRobot(RobotLink):
         self.intrinsics = intrinsics
         self.mount = mount
         self.room = room
-        self.captures = (captures if isinstance(captures, CapturesFolder) or captures is None
+        # a folder of photos, or any photo source with next() -> FolderPhoto (a live camera)
+        self.captures = (captures if captures is None or hasattr(captures, "next")
                          else CapturesFolder(captures))
         self._truth: PlanningGrid = build_grid(self.world, config.workspace, margin=0.0)
         x, y, z = (float(v) for v in start.translation)
@@ -572,7 +573,10 @@ class SimRobot(RobotLink):
         self._shots += 1
         if self.captures is not None:
             photo = self.captures.next()
-            return CaptureResult(photo.image, photo.intrinsics, camera, robot, self.mount, time.time(),
+            mount = self.mount if photo.mount is None else photo.mount  # the photo's own camera pose wins
+            if mount is not self.mount:
+                camera = camera_pose_in_world(robot, mount)
+            return CaptureResult(photo.image, photo.intrinsics, camera, robot, mount, time.time(),
                                  "captures-folder", photo.name, photo.ground_truth)
         with self._render_lock:
             if self._renderer is None:
