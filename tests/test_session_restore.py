@@ -267,3 +267,33 @@ def test_any_field_of_a_saved_session_replaced_by_nonsense_is_refused_or_dropped
             except SessionError:
                 pass
     assert cases > 200
+
+
+def test_the_console_restores_a_partly_bad_session_and_refuses_an_implausible_dropped_file(tmp_path: Path) -> None:
+    """Through the real console wiring: the intact scene comes back with the reason kept for the page,
+    and a 1e9 m object dropped in the watched folder is refused with a notice, changing nothing."""
+    from console.app import ConsoleApp, ConsoleConfig, wait_until
+
+    folder = tmp_path / "s"
+    data = _saved_session(folder)
+    data["route"]["start"] = [2.5, 0.7, float("nan")]
+    _write(folder, data)
+    app = ConsoleApp(ConsoleConfig(session_dir=folder, scene_dir=tmp_path / "scenes", port=0)).start()
+    try:
+        s = app.session
+        assert s is not None and len(s.scene.objects) == 10
+        text, warn = s.status_text()
+        assert warn and "route.start[2]: must be finite" in text
+        told: list = []
+        s.subscribe(lambda topic, payload: told.append(payload) if topic == NOTICE else None)
+        on_disk = (folder / "session.json").read_bytes()
+        counts = s.grid.counts()
+        (tmp_path / "scenes" / "huge.json").write_text(json.dumps({"version": 1, "objects": [
+            {"id": "huge", "label": "box", "position": [2.5, 4.0, 0.5], "size": [1e9, 1e9, 1e9]}]}))
+        assert wait_until(lambda: any(n.title == "Scene file ignored" for n in told), 60.0)
+        body = next(n.body for n in told if n.title == "Scene file ignored")
+        assert "huge.json" in body and "objects[0].size[0]: 1e+09 m is implausible" in body
+        assert len(s.scene.objects) == 10 and s.grid.counts() == counts
+        assert (folder / "session.json").read_bytes() == on_disk
+    finally:
+        app.stop()
