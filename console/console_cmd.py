@@ -62,6 +62,40 @@ def _vec3(text: str) -> tuple[float, float, float]:
     return (v[0], v[1], v[2])
 
 
+def camera_source(args: argparse.Namespace) -> object | None:
+    """The live camera of ``--camera SOURCE --camera-file camera.toml`` (opened once, kept on ``args``),
+    or ``None`` without ``--camera``. Raises :class:`console.cli.CliError` naming the bad option or key."""
+    if getattr(args, "camera", None) is None:
+        if getattr(args, "camera_file", None) is not None:
+            from console.cli import CliError
+
+            raise CliError("--camera-file is for a live camera: give --camera SOURCE too")
+        return None
+    source = getattr(args, "_camera_source", None)
+    if source is None:
+        from console.cli import CliError
+        from pipeline.geometry import CameraError
+
+        from .link.camera_source import CameraSourceError, open_camera_source
+
+        if args.captures is not None:
+            raise CliError("--camera and --captures: give one camera (a live source or a folder of photos)")
+        try:
+            source = open_camera_source(args.camera, args.camera_file)
+        except (CameraSourceError, CameraError) as exc:
+            raise CliError(str(exc)) from None
+        args._camera_source = source
+    return source
+
+
+def photo_source(args: argparse.Namespace) -> object | None:
+    """What the simulated robot serves as photos: ``--captures DIR``, the live camera, or ``None``
+    (a MAVLink link takes the live camera through :func:`link_options`)."""
+    if str(args.robot).startswith("mavlink:"):
+        return args.captures
+    return camera_source(args) or args.captures
+
+
 def link_options(args: argparse.Namespace) -> dict[str, object]:
     """Keyword options for :func:`console.link.open_link` from the parsed arguments."""
     if not str(args.robot).startswith("mavlink:"):
@@ -70,7 +104,11 @@ def link_options(args: argparse.Namespace) -> dict[str, object]:
     from .link.ned import NedFrame
 
     ned = NedFrame(origin=args.ned_origin, north_yaw=math.radians(args.north_deg))
-    return {"config": MavlinkConfig(ned=ned, ground=GroundMotion(command=args.ground_command))}
+    options: dict[str, object] = {"config": MavlinkConfig(ned=ned, ground=GroundMotion(command=args.ground_command))}
+    source = camera_source(args)
+    if source is not None:
+        options.update(camera=source, mount=source.camera.mount)  # type: ignore[attr-defined]
+    return options
 
 
 def add_console_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:  # type: ignore[type-arg]
@@ -106,6 +144,11 @@ def add_console_parser(subparsers: argparse._SubParsersAction) -> argparse.Argum
     p.add_argument("--captures", type=Path, default=None, metavar="DIR",
                    help="serve real photos from DIR (the format of ../shared/bench/dev: image + JSON with K) "
                         "as the robot's camera instead of its own")
+    p.add_argument("--camera", default=None, metavar="SOURCE",
+                   help="a live camera as the robot's camera: rtsp://... or http://.../stream.mjpg (MJPEG), "
+                        "/dev/video0 or a device number, or a video file; needs --camera-file")
+    p.add_argument("--camera-file", type=Path, default=None, metavar="CAMERA.toml",
+                   help="intrinsics and mount of the --camera (morphonavi calibrate writes one)")
     p.add_argument("--failsafe-after", type=_positive, default=3.0, metavar="SECONDS",
                    help="mission failsafe: hold the robot after this long without hearing it [s] (default 3)")
     p.add_argument("--failsafe-hold", type=_non_negative, default=5.0, metavar="SECONDS",
@@ -144,7 +187,7 @@ def cmd_console(args: argparse.Namespace) -> int:
     config = ConsoleConfig(
         robot=args.robot, scene_dir=args.scene if args.scene is not None else DEFAULT_SCENES,
         session_dir=args.session, host=args.host, port=args.port, models=args.models, fresh=args.fresh,
-        resolution=args.resolution, margin=args.margin, captures=args.captures,
+        resolution=args.resolution, margin=args.margin, captures=photo_source(args),
         failsafe_after=args.failsafe_after, failsafe_hold=args.failsafe_hold, link_options=link_options(args),
     )
     try:

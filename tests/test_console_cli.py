@@ -90,3 +90,43 @@ def test_autopilot_status_messages_reach_the_operator(tmp_path: Path) -> None:
             assert told == ["CRITICAL: Crash: Disarming"]
     finally:
         app.stop()
+
+
+def test_live_camera_options(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    import cv2
+    import numpy as np
+
+    from console.console_cmd import link_options, photo_source
+
+    video = tmp_path / "v.avi"
+    writer = cv2.VideoWriter(str(video), cv2.VideoWriter_fourcc(*"MJPG"), 20.0, (160, 120))
+    for i in range(10):
+        writer.write(np.full((120, 160, 3), 10 * i, np.uint8))
+    writer.release()
+    cam = tmp_path / "camera.toml"
+    cam.write_text("[intrinsics]\nfx = 150.0\nfy = 150.0\ncx = 80.0\ncy = 60.0\nwidth = 160\nheight = 120\n"
+                   "[mount]\nposition = [0.1, 0.0, 0.8]\npitch_deg = 10.0\n")
+    args = build_parser().parse_args(["console", "--camera", str(video), "--camera-file", str(cam)])
+    source = photo_source(args)
+    try:
+        assert source is not None and source.next(timeout=20).image.shape == (120, 160, 3)
+        assert photo_source(args) is source  # opened once
+    finally:
+        source.close()
+    args = build_parser().parse_args(["console", "--robot", "mavlink:udpin:127.0.0.1:0", "--camera", str(video),
+                                      "--camera-file", str(cam)])
+    opts = link_options(args)
+    try:
+        assert callable(opts["camera"]) and opts["mount"].position == (0.1, 0.0, 0.8)
+        assert photo_source(args) is None
+    finally:
+        opts["camera"].close()
+    for argv, message in (
+        (["--camera", str(video)], "--camera needs --camera-file"),
+        (["--camera-file", str(cam)], "--camera-file is for a live camera"),
+        (["--camera", str(video), "--camera-file", str(tmp_path / "nope.toml")], "camera file not found"),
+        (["--camera", "ftp://x", "--camera-file", str(cam)], "unsupported scheme"),
+        (["--camera", str(video), "--camera-file", str(cam), "--captures", str(tmp_path)], "give one camera"),
+    ):
+        assert main(["console", *argv, "--session", str(tmp_path / "s")]) == 2
+        assert message in capsys.readouterr().err
