@@ -17,7 +17,7 @@ import numpy as np
 import viser
 
 from .objects_view import label_color
-from .photo_marks import depth_colorbar, draw_labels, photo_labels
+from .photo_marks import BAR_WIDTH, depth_colorbar, draw_labels, photo_labels
 from .wording import plural
 from .session import CAPTURE, CaptureRecord, Session
 
@@ -77,9 +77,8 @@ def draw_detections(rec: CaptureRecord, colors: Any = None, width: int = PANEL_W
 
 def depth_with_scale(depth: np.ndarray, width: int = PANEL_WIDTH) -> tuple[np.ndarray, float, float]:
     """The depth picture with its colour scale in metres on the right, ``width`` px wide in all."""
-    bar_w = 72
-    img, near, far = depth_picture(depth, width - bar_w)
-    bar, _ = depth_colorbar(near, far, img.shape[0], bar_w)
+    img, near, far = depth_picture(depth, width - BAR_WIDTH)
+    bar, _ = depth_colorbar(near, far, img.shape[0], BAR_WIDTH)
     return np.ascontiguousarray(np.hstack([img, bar])), near, far
 
 

@@ -21,6 +21,8 @@ Box = tuple[float, float, float, float]  # x1, y1, x2, y2 [px]
 FONT = cv2.FONT_HERSHEY_SIMPLEX
 FONT_SCALE = 0.45
 TOUCH_PX = 3.0  # boxes this close (or overlapping) belong to one cluster [px]
+BAR_WIDTH = 96  # width of the depth scale picture [px]
+TICK_SCALE = 0.55  # font scale of its tick labels
 
 
 @dataclass(frozen=True)
@@ -150,7 +152,7 @@ def nice_ticks(near: float, far: float, count: int = 5) -> list[float]:
     return [round(first + k * step, 10) for k in range(int((far - first) / step + 1e-9) + 1)]
 
 
-def depth_colorbar(near: float, far: float, height: int, width: int = 72) -> tuple[np.ndarray, list[tuple[float, int]]]:
+def depth_colorbar(near: float, far: float, height: int, width: int = BAR_WIDTH) -> tuple[np.ndarray, list[tuple[float, int]]]:
     """The depth scale: a vertical bar, ``near`` [m] at the top, ``far`` at the bottom, ticks in metres.
 
     Returns the picture (``height`` x ``width`` RGB) and the ticks as ``(metres, row)``.
@@ -169,7 +171,7 @@ def depth_colorbar(near: float, far: float, height: int, width: int = 72) -> tup
         ticks.append((v, row))
         cv2.line(img, (18, row), (23, row), (60, 60, 60), 1)
         text = f"{v:g} m"
-        (_, th), _ = cv2.getTextSize(text, FONT, 0.38, 1)
+        (_, th), _ = cv2.getTextSize(text, FONT, TICK_SCALE, 1)
         y = min(max(row + th // 2, th + 1), height - 2)
-        cv2.putText(img, text, (26, y), FONT, 0.38, (40, 40, 40), 1, cv2.LINE_AA)
+        cv2.putText(img, text, (26, y), FONT, TICK_SCALE, (30, 30, 30), 1, cv2.LINE_AA)
     return img, ticks

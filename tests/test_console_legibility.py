@@ -17,7 +17,7 @@ from console.capture_view import PANEL_WIDTH, depth_with_scale, frustum_photo
 from console.client_notice import DISCONNECTED_TEXT, notice_seconds, page_style, tell
 from console.mission_view import segment_table
 from console.objects_view import NONE_CHOICE, ObjectsView
-from console.photo_marks import box_clusters, depth_colorbar, depth_colors, nice_ticks, photo_labels
+from console.photo_marks import BAR_WIDTH, box_clusters, depth_colorbar, depth_colors, nice_ticks, photo_labels
 from console.picking import click_intent, drop_lines, ray_plane, top_view, typed_goal
 from console.session import Session, SessionError
 from console.wording import mode_text, natural_sorted, plural
@@ -99,7 +99,7 @@ def test_the_depth_picture_has_a_scale_in_metres() -> None:
     assert nice_ticks(0.8, 8.2) == [1.0, 3.0, 5.0, 7.0] or nice_ticks(0.8, 8.2) == [2.0, 4.0, 6.0, 8.0]
     assert nice_ticks(1.0, 1.0) == [] and nice_ticks(math.nan, 2.0) == []
     bar, ticks = depth_colorbar(0.8, 8.2, 300)
-    assert bar.shape == (300, 72, 3) and len(ticks) >= 3
+    assert bar.shape == (300, BAR_WIDTH, 3) and len(ticks) >= 3
     values = [v for v, _ in ticks]
     rows = [r for _, r in ticks]
     assert values == sorted(values) and rows == sorted(rows) and 0.8 <= values[0] and values[-1] <= 8.2
@@ -110,7 +110,7 @@ def test_the_depth_picture_has_a_scale_in_metres() -> None:
     depth = np.linspace(1.0, 5.0, 240 * 320, dtype=np.float32).reshape(240, 320)
     img, near, far = depth_with_scale(depth)
     assert img.shape[1] == PANEL_WIDTH and 1.0 <= near < far <= 5.0
-    assert (img[:, -72:] == 255).mean() > 0.5  # the white scale strip with its bar and ticks
+    assert (img[:, -BAR_WIDTH:] == 255).mean() > 0.5  # the white scale strip with its bar and ticks
 
 
 def test_the_photo_on_the_frustum_is_see_through() -> None:
