@@ -13,7 +13,7 @@ frame (z up) [m], yaw about +z [rad], sizes ``(w, h, l)`` [m] (see :mod:`pipelin
    global assignment (``scipy.optimize.linear_sum_assignment`` on the Mahalanobis costs): an
    observation updates at most one object, an object takes at most one observation per capture.
 3. **Fusion.** An object keeps its observations (``SceneObject.history``); its position is their
-   information-weighted mean (covariance along / across each camera ray), its yaw their weighted
+   mean weighted by ``1 / sigma^2`` (sigma along each camera ray), its yaw their weighted
    mean modulo pi (a box is symmetric under a half turn), its size their weighted mean. A far, cut
    or occluded view weighs little; a capture seen again replaces its own earlier observation.
 4. **Pinned objects** (:attr:`~pipeline.scene.SceneObject.is_pinned`: the operator moved, typed or
@@ -154,15 +154,16 @@ def _cov(s: Sighting) -> np.ndarray:
 
 
 def _estimate(sightings: Sequence[Sighting]) -> tuple[np.ndarray, np.ndarray, float, Vec3]:
-    """``(position, covariance, yaw, size)`` fused from the used sightings (information-weighted)."""
-    info = np.zeros((3, 3))
-    vec = np.zeros(3)
-    for s in sightings:
-        inv = np.linalg.inv(_cov(s))
-        info += inv
-        vec += inv @ np.asarray(s.position, dtype=np.float64)
-    cov = np.linalg.inv(info)
-    pos = cov @ vec
+    """``(position, covariance, yaw, size)`` fused from the used sightings.
+
+    The position is the mean weighted by ``1 / along^2`` (a convex combination: it stays among the
+    views even when their across-ray errors disagree, which the information-weighted mean of narrow
+    ray covariances would not); its covariance (for the association gate) ``(sum R_k^-1)^-1``, the
+    views' ray covariances combined: narrow across the rays it was seen along.
+    """
+    w = np.array([1.0 / s.sigma[0] ** 2 for s in sightings])
+    pos = (w[:, None] * np.array([s.position for s in sightings], dtype=np.float64)).sum(0) / w.sum()
+    cov = np.linalg.inv(sum(np.linalg.inv(_cov(s)) for s in sightings))
     wy = np.array([1.0 / s.sigma[2] ** 2 for s in sightings])
     c2 = float(np.sum(wy * np.cos([2 * s.yaw for s in sightings])))
     s2 = float(np.sum(wy * np.sin([2 * s.yaw for s in sightings])))
@@ -171,8 +172,7 @@ def _estimate(sightings: Sequence[Sighting]) -> tuple[np.ndarray, np.ndarray, fl
     if math.cos(yaw - ref) < 0:
         yaw += math.pi
     yaw = math.atan2(math.sin(yaw), math.cos(yaw))
-    ws = np.array([1.0 / s.sigma[0] ** 2 for s in sightings])
-    size = tuple(float(v) for v in (ws[:, None] * np.array([s.size for s in sightings])).sum(0) / ws.sum())
+    size = tuple(float(v) for v in (w[:, None] * np.array([s.size for s in sightings])).sum(0) / w.sum())
     return pos, cov, yaw, size  # type: ignore[return-value]
 
 

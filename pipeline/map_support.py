@@ -26,7 +26,7 @@ from .scene import SceneObject
 SUPPORT_TOLERANCE = 0.05
 """A bottom this close to its support [m] is resting on it (no correction)."""
 
-SUPPORT_REACH = 0.25
+SUPPORT_REACH = 0.15
 """A bottom within this of another object's top [m] (footprints overlapping) stands on it."""
 
 MIN_SUPPORT_OVERLAP = 0.3
