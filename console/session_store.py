@@ -372,7 +372,8 @@ class Persistence:
                 self._outbox.append(Notice(
                     "Changes are not being saved",
                     f"writing {path} failed: {exc}. The console keeps working, but a restart will lose the "
-                    "changes: make the folder writable, or save elsewhere with 'Save as'.", "error"))
+                    "changes: make the folder writable (the next change then saves everything) or free some disk space.",
+                    "error"))
             self._last_save_error = str(exc)
             return
         if self._last_save_error is not None:
