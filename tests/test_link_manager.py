@@ -173,7 +173,7 @@ def test_link_loss_runs_the_failsafe_and_the_mission_survives() -> None:
         while (robot.latest_state().link_ok is False or not robot.latest_state().landed) and time.monotonic() < deadline:
             time.sleep(0.02)
         msgs = [e.message for e in manager.events]
-        assert any(m.startswith("FAILSAFE: no heartbeat") for m in msgs)
+        assert any(m.startswith("FAILSAFE: robot not heard for") for m in msgs)
         assert any("not delivered" in m for m in msgs)  # no link: the robot's own failsafe landed it
         st = robot.latest_state()
         assert st.landed and st.link_ok and 0.8 < st.position[1] < 2.0
@@ -211,7 +211,7 @@ def test_a_link_back_during_a_slow_hold_pauses_instead_of_landing() -> None:
         assert manager.wait(5.0, until=[MissionStatus.PAUSED]) is MissionStatus.PAUSED, \
             [e.message for e in manager.events]
         msgs = [e.message for e in manager.events]
-        assert any(m.startswith("FAILSAFE: no heartbeat") for m in msgs)
+        assert any(m.startswith("FAILSAFE: robot not heard for") for m in msgs)
         assert any(m.startswith("link restored during the failsafe hold") for m in msgs)
         assert not any("landing" in m for m in msgs)
         time.sleep(0.3)

@@ -168,7 +168,8 @@ def test_full_walk_takeoff_fly_land_walk_mission(vehicle) -> None:
     walk_targets = [t for t in emu.record.targets if abs(t[2]) < 1e-6]
     air_targets = [t for t in emu.record.targets if t[2] < -1.0]
     assert walk_targets and air_targets
-    assert all(t[3] == POSITION_YAW_MASK for t in emu.record.targets)
+    assert all(t[3] in (POSITION_YAW_MASK, POSITION_ONLY_MASK) for t in emu.record.targets)  # yaw: travel direction
+    assert sum(t[3] == POSITION_YAW_MASK for t in emu.record.targets) > 0.8 * len(emu.record.targets)
     # the first walking target: world (2.5, 1.8) is 1.1 m north of the origin
     assert walk_targets[0][:2] == pytest.approx((1.1, 0.0), abs=1e-4)
     assert min(t[2] for t in air_targets) == pytest.approx(-1.875, abs=1e-4)
@@ -180,7 +181,7 @@ def test_full_walk_takeoff_fly_land_walk_mission(vehicle) -> None:
     assert elapsed - 1.5 <= emu.record.gcs_heartbeats <= elapsed + 3
 
 
-@pytest.mark.parametrize("vehicle", [{"fly_speed": 1.0}], indirect=True)  # a flight long enough to fail
+@pytest.mark.parametrize("vehicle", [{"config": replace(CFG, fly_speed=1.0)}], indirect=True)  # a long flight
 def test_heartbeat_loss_triggers_the_failsafe_and_keeps_the_mission(vehicle) -> None:
     link, emu = vehicle
     manager = MissionManager(link, failsafe_after=1.5, failsafe_hold=0.4)
@@ -199,7 +200,7 @@ def test_heartbeat_loss_triggers_the_failsafe_and_keeps_the_mission(vehicle) -> 
         time.sleep(0.05)
     time.sleep(0.3)
     msgs = _events(manager)
-    assert any("FAILSAFE: no heartbeat" in m for m in msgs)
+    assert any(m.startswith("FAILSAFE: robot not heard for") and "no heartbeat" in m for m in msgs)
     assert any("landing" in m for m in msgs) and any("FAILSAFE: landed" in m for m in msgs)
     assert emu.record.modes[-2:] == ["BRAKE", "LAND"]  # hold, then land
     # the mission is kept: same mission, the interrupted segment, and the last known state

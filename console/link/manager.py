@@ -10,10 +10,19 @@ stay in charge:
   finds the robot on the ground, landing first if a walk finds it in the air);
 - **failures** (a refused command, a blocked path, a time-out) pause the mission with the reason;
   nothing is lost and resume retries;
-- **failsafe**: when the robot has not been heard from (``RobotState.link_age``) for
+- **failsafe**: when the robot has not been heard from with fresh telemetry (the link's live
+  :meth:`~console.link.base.RobotLink.link_age_now`: heartbeat silence, or a stale position) for
   ``failsafe_after`` seconds the manager holds, waits ``failsafe_hold`` seconds for the link to
-  come back and otherwise lands where the robot is; the console is told at every step and the
-  mission stays resumable.
+  come back and otherwise lands where the robot is. Every decision reads the live age, never a
+  stored sample: a robot heard again before the landing takes effect cancels it (the mission
+  pauses). When the link returns after a failsafe the manager says what the robot is really
+  doing (its mode, landed or not). The console is told at every step; the mission stays resumable;
+- **watchdog**: every segment has a deadline from its length and the expected speeds (with
+  margin); on expiry the robot holds and the mission pauses with the reason;
+- **reboot / reconnect** of the robot (``RobotState.link_epoch`` changes) during a segment holds
+  and pauses the mission with the reason and the link's warnings (e.g. a moved EKF origin);
+- **readiness**: before a segment the manager waits (up to ``ready_timeout``) for a valid
+  position instead of failing at once.
 
 Positions are world frame (z up) [m]; times [s]. Listeners receive :class:`MissionEvent` on the
 manager's thread and must return quickly.
@@ -33,7 +42,7 @@ import numpy as np
 
 from planner.mission import Mission, MissionSegment, SegmentKind
 
-from .base import LinkError, RobotLink, RobotState, RunStatus, SegmentRun
+from .base import LinkError, Mode, RobotLink, RobotState, RunStatus, SegmentRun
 
 log = logging.getLogger(__name__)
 
@@ -124,15 +133,27 @@ class MissionManager:
             then started from where the robot is).
         poll: Monitoring period [s].
         progress_rate: Maximum rate of ``progress`` events [Hz].
+        watchdog_speeds: Slowest expected (walk, fly, vertical) speeds [m/s] for segment deadlines.
+        watchdog_factor: Deadline = expected time x this + ``watchdog_slack``.
+        watchdog_slack: [s].
+        ready_timeout: Longest wait for a valid position (and, in a take-off, for readiness) [s].
     """
 
     def __init__(self, link: RobotLink, *, failsafe_after: float = 3.0, failsafe_hold: float = 5.0,
                  geofence_margin: float = 0.0, resume_tolerance: float = 0.6, poll: float = 0.02,
-                 progress_rate: float = 5.0) -> None:
+                 progress_rate: float = 5.0, watchdog_speeds: tuple[float, float, float] = (0.1, 0.2, 0.1),
+                 watchdog_factor: float = 2.0, watchdog_slack: float = 30.0, ready_timeout: float = 60.0) -> None:
         for name, v in (("failsafe_after", failsafe_after), ("failsafe_hold", failsafe_hold),
-                        ("resume_tolerance", resume_tolerance), ("poll", poll), ("progress_rate", progress_rate)):
+                        ("resume_tolerance", resume_tolerance), ("poll", poll), ("progress_rate", progress_rate),
+                        ("watchdog_factor", watchdog_factor), ("watchdog_slack", watchdog_slack),
+                        ("ready_timeout", ready_timeout), *((f"watchdog_speeds[{i}]", w)
+                                                           for i, w in enumerate(watchdog_speeds))):
             if not (v > 0 and math.isfinite(v)):
                 raise ValueError(f"{name} must be a positive number of seconds/metres, got {v}")
+        if len(watchdog_speeds) != 3:
+            raise ValueError("watchdog_speeds must be (walk, fly, vertical) [m/s]")
+        self.watchdog_speeds = tuple(float(w) for w in watchdog_speeds)
+        self.watchdog_factor, self.watchdog_slack, self.ready_timeout = watchdog_factor, watchdog_slack, ready_timeout
         if not (geofence_margin >= 0 and math.isfinite(geofence_margin)):
             raise ValueError(f"geofence_margin must be >= 0 m, got {geofence_margin}")
         self.link = link
@@ -154,6 +175,7 @@ class MissionManager:
         self._segment_done = 0.0  # fraction of the current original segment done before this run
         self._last_progress_event = 0.0
         self._failsafe_acting = False
+        self._told_back = False
         self._resume_point: int | None = None
         self.events: list[MissionEvent] = []  # the last 200, for late listeners and tests
 
@@ -237,7 +259,7 @@ class MissionManager:
             raise MissionStateError(f"the robot link is not healthy ({st.health}): not starting")
         first = mission.segments[0]
         gap = math.dist(st.position[:2], first.start[:2])
-        if gap > self.resume_tolerance:
+        if st.position_valid and gap > self.resume_tolerance:  # unknown yet: checked once it is known
             raise MissionStateError(
                 f"the mission starts at ({first.start[0]:.2f}, {first.start[1]:.2f}) but the robot is at "
                 f"({st.position[0]:.2f}, {st.position[1]:.2f}), {gap:.2f} m away: plan from the robot's position")
@@ -338,6 +360,7 @@ class MissionManager:
             base = sum(lengths[:index])
             self._resume_point = next_wp
             try:
+                self._wait_position(index, len(segs))
                 pending = self._prepare(segs[index], next_wp, fresh=not resumed)
             except LinkError as exc:
                 self._emit("error", f"segment {index + 1}/{len(segs)} cannot start: {exc}; mission paused",
@@ -362,6 +385,39 @@ class MissionManager:
             next_wp, resumed = self._resume_point, True
         self._emit("info", f"mission {mission.id} done", status=MissionStatus.DONE, fraction=1.0,
                    segment_fraction=1.0)
+
+    def _wait_position(self, index: int, n: int) -> None:
+        """Wait (up to ``ready_timeout``) for a valid position; raises LinkError naming why not."""
+        st = self._state()
+        if st.position_valid:
+            return
+        self._emit("info", f"segment {index + 1}/{n}: waiting for the robot's position ({st.health})")
+        deadline = time.monotonic() + self.ready_timeout
+        while not st.position_valid:
+            with self._cond:
+                if self._abort:
+                    return
+            if time.monotonic() > deadline:
+                raise LinkError(f"no valid robot position after {self.ready_timeout:.0f} s ({st.health}"
+                                + (f"; {st.readiness}" if st.readiness else "") + ")")
+            if self._link_lost():
+                raise LinkError(f"the robot is not heard from ({st.health})")
+            time.sleep(self.poll)
+            st = self._state()
+
+    def _deadline(self, part: MissionSegment) -> float:
+        """Watchdog time for one link segment [s]: expected time x factor + slack."""
+        walk, fly, vertical = self.watchdog_speeds
+        pts = np.asarray(part.waypoints, dtype=np.float64)
+        d = np.diff(pts, axis=0)
+        horizontal = float(np.linalg.norm(d[:, :2], axis=1).sum())
+        up_down = float(np.abs(d[:, 2]).sum())
+        if part.kind is SegmentKind.WALK:
+            t = horizontal / walk
+        else:
+            t = horizontal / fly + up_down / vertical
+        extra = self.ready_timeout if part.kind is SegmentKind.TAKEOFF else 0.0
+        return t * self.watchdog_factor + self.watchdog_slack + extra
 
     def _prepare(self, seg: MissionSegment, next_wp: int | None,
                  fresh: bool = True) -> list[tuple[MissionSegment, bool]] | None:
@@ -455,7 +511,20 @@ class MissionManager:
             return "paused"
         with self._cond:
             self._run = run
+        epoch = self._state().link_epoch
+        deadline = time.monotonic() + self._deadline(part)
         while not run.done:
+            st = self._state()
+            if st.link_epoch != epoch and not self._link_lost():
+                if is_main:
+                    self._resume_point = self._original_index(mission.segments[index], part, run.next_waypoint)
+                return self._stop_paused(run, f"{what}: the robot reconnected or rebooted ({st.health}"
+                                         + "".join(f"; {w}" for w in st.warnings) + ")")
+            if time.monotonic() > deadline:
+                if is_main:
+                    self._resume_point = self._original_index(mission.segments[index], part, run.next_waypoint)
+                return self._stop_paused(run, f"{what} overran its deadline of {self._deadline(part):.0f} s "
+                                              f"({part.length:.1f} m)")
             if self._link_lost():
                 if is_main:
                     self._resume_point = self._original_index(mission.segments[index], part, run.next_waypoint)
@@ -495,9 +564,34 @@ class MissionManager:
                        status=MissionStatus.PAUSED, **where)
         return "paused"
 
+    def _stop_paused(self, run: SegmentRun, why: str) -> str:
+        """Hold the robot and pause the mission with ``why``; returns ``paused``."""
+        try:
+            self.link.hold()
+        except LinkError as exc:
+            why += f"; hold failed: {exc}"
+        run.wait(1.0)
+        self._emit("error", f"{why}: robot held, mission paused (resume continues, abort ends it)",
+                   status=MissionStatus.PAUSED)
+        return "paused"
+
     def _link_lost(self) -> bool:
+        """Live: the robot has not been heard with fresh telemetry for ``failsafe_after``."""
+        return self.link.link_age_now() > self.failsafe_after
+
+    def _link_back(self) -> bool:
+        return self.link.link_age_now() <= self.failsafe_after
+
+    def _robot_now(self) -> str:
+        """What the robot is really doing, from a fresh state sample."""
         st = self.link.latest_state()
-        return st is not None and st.link_age > self.failsafe_after
+        if st is None:
+            return "no robot state"
+        where = "on the ground" if st.landed else "in the air"
+        ap = f", autopilot mode {st.autopilot_mode}" if st.autopilot_mode else ""
+        pos = (f" at ({st.position[0]:.2f}, {st.position[1]:.2f}, {st.position[2]:.2f})" if st.position_valid
+               else ", position unknown")
+        return f"the robot is {st.mode.value}{ap}, {where}{pos}"
 
     def _wait_resume(self) -> bool:
         """Wait (paused or after the failsafe) for resume (True) or abort (False); runs the
@@ -513,28 +607,32 @@ class MissionManager:
                 self._cond.wait(self.poll)
             if status is not MissionStatus.FAILSAFE and self._link_lost():
                 self._failsafe()
+            elif status is MissionStatus.FAILSAFE and not self._told_back and self._link_back():
+                self._told_back = True
+                self._emit("warning", f"link restored after the failsafe: {self._robot_now()} "
+                                      "(resume or abort)")
         self._emit("info", "mission resumed", status=MissionStatus.RUNNING)
         return True
 
     def _failsafe(self) -> None:
-        """Hold, wait ``failsafe_hold`` for the link, then land where the robot is."""
+        """Hold, wait ``failsafe_hold`` for the link, then land where the robot is; every decision
+        reads the link's live age."""
         st = self.link.latest_state()
-        age = st.link_age if st else float("inf")
+        why = st.health if st is not None else "no robot state"
         with self._cond:
             self._failsafe_acting = True
+            self._told_back = False
         try:
-            self._emit("warning", f"FAILSAFE: no heartbeat from the robot for {age:.1f} s: holding",
-                       status=MissionStatus.FAILSAFE)
+            self._emit("warning", f"FAILSAFE: robot not heard for {self.link.link_age_now():.1f} s ({why}): "
+                                  "holding", status=MissionStatus.FAILSAFE)
             deadline = time.monotonic() + self.failsafe_hold  # counted from the failsafe, not the hold's ACK
             try:
                 self.link.hold()
             except LinkError as exc:
                 self._emit("error", f"failsafe hold not delivered: {exc}")
             while True:  # checked at least once after the hold, even when its retries outlasted the deadline
-                st = self.link.latest_state()
-                if st is not None and st.link_ok and st.link_age <= self.failsafe_after:
-                    self._emit("warning", "link restored during the failsafe hold: mission paused "
-                                          "(resume or abort)", status=MissionStatus.PAUSED)
+                if self._link_back():
+                    self._restored("during the failsafe hold")
                     return
                 if time.monotonic() >= deadline:
                     break
@@ -544,7 +642,12 @@ class MissionManager:
                 self._emit("warning", "FAILSAFE: the robot is on the ground; the mission is kept "
                                       "(resume once the link is back)")
                 return
-            self._emit("warning", f"FAILSAFE: link still lost after {self.failsafe_hold:.1f} s: landing")
+            if self._link_back():  # heard again at the last moment: no landing
+                self._restored("before the failsafe landing")
+                return
+            self._emit("warning", f"FAILSAFE: link still lost after {self.failsafe_hold:.1f} s "
+                                  f"({self.link.link_age_now():.1f} s without fresh telemetry): landing where the "
+                                  "robot is")
             floor = float(self._mission.bounds_min[2]) if self._mission else 0.0
             try:
                 land = self.link.land_here(floor)
@@ -552,14 +655,27 @@ class MissionManager:
                 self._emit("error", f"FAILSAFE landing not delivered ({exc}): the autopilot's own failsafe "
                                     "(ArduPilot FS_GCS_ENABLE) must act")
                 return
-            land.wait(max(30.0, 10 * self.failsafe_hold))
+            end = time.monotonic() + max(30.0, 10 * self.failsafe_hold)
+            while not land.done and time.monotonic() < end:
+                st = self.link.latest_state()
+                if self._link_back() and st is not None and st.mode is not Mode.LANDING and not st.landed:
+                    self.link.abort()  # heard again before the landing took effect: cancel it
+                    self._restored("before the failsafe landing took effect (landing cancelled)")
+                    return
+                land.wait(self.poll)
             if land.status is RunStatus.DONE:
                 self._emit("warning", "FAILSAFE: landed; the mission is kept (resume once the link is back)")
             else:
-                self._emit("error", f"FAILSAFE landing did not complete: {land.error or land.status.value}")
+                self._emit("error", f"FAILSAFE landing not confirmed: {land.error or land.status.value}; "
+                                    "the robot's state is reported when the link returns")
         finally:
             with self._cond:
                 self._failsafe_acting = False
+
+    def _restored(self, when: str) -> None:
+        self._told_back = True
+        self._emit("warning", f"link restored {when}: {self._robot_now()}; mission paused (resume or abort)",
+                   status=MissionStatus.PAUSED)
 
 
 __all__ = ["MissionManager", "MissionStatus", "MissionProgress", "MissionEvent", "MissionStateError",

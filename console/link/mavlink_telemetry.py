@@ -1,0 +1,357 @@
+"""MAVLink telemetry: vehicle identity, validation at the boundary, stream ages, reboot detection.
+
+:class:`Telemetry` receives every decoded MAVLink message (from the transport's receive thread)
+and keeps the latest *valid* vehicle state in the vehicle's local NED frame [m, m/s, rad]:
+
+- **identity**: the vehicle is the first HEARTBEAT whose component is the autopilot's
+  (``MAV_COMP_ID_AUTOPILOT1`` by default), whose autopilot type is not ``MAV_AUTOPILOT_INVALID``
+  and whose vehicle type is not a peripheral (gimbal, camera, GCS ...). Telemetry and COMMAND_ACK
+  are taken from that (system, component) only; the other components are listed; a vehicle using
+  the console's own system id, and a second vehicle on the port, are warned about;
+- **validation**: every field used is checked finite and plausible; an invalid message is dropped
+  whole and counted per message type with the reason (``LOCAL_POSITION_NED.x: not finite``), so
+  an invalid value never becomes the robot's pose;
+- **ages**: the time of the last message of each stream (valid or not) and of the last valid
+  position, so a stream that stopped (without a heartbeat gap) shows as stale;
+- **reboot / reconnect**: ``time_boot_ms`` going back, or a heartbeat after a silence longer
+  than the heartbeat timeout, increments ``epoch`` and records why; the EKF origin
+  (GPS_GLOBAL_ORIGIN) is kept and a moved origin is warned about.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import threading
+import time
+from dataclasses import dataclass, field
+from typing import Any, Callable
+
+log = logging.getLogger(__name__)
+
+Vec3 = tuple[float, float, float]
+
+LANDED_UNDEFINED, LANDED_ON_GROUND, LANDED_IN_AIR, LANDED_TAKEOFF, LANDED_LANDING = 0, 1, 2, 3, 4
+"""MAV_LANDED_STATE values (EXTENDED_SYS_STATE.landed_state)."""
+
+STATUSTEXT_KEPT = 20
+"""How many of the vehicle's latest STATUSTEXT messages (and link warnings) the link keeps."""
+STATUSTEXT_IN_STATE = 5
+"""How many of them each state sample carries."""
+
+MAV_TYPE_NOT_VEHICLE = frozenset({5, 6, 18, 26, 27, 30, 31, 32, 34, 36, 38, 39, 41, 42})
+"""MAV_TYPE values of peripherals, never the vehicle: antenna tracker, GCS, onboard controller,
+gimbal, ADS-B, camera, charging station, FLARM, ODID, servo, battery, log, OSD, IMU..."""
+
+MAV_AUTOPILOT_INVALID = 8
+MAV_SYS_STATUS_PREARM_CHECK = 1 << 28
+EKF_POS_HORIZ_REL, EKF_POS_HORIZ_ABS, EKF_POS_VERT_ABS = 8, 16, 32
+EKF_CONST_POS_MODE = 128
+TRACKED = ("LOCAL_POSITION_NED", "ATTITUDE", "EXTENDED_SYS_STATE", "SYS_STATUS")
+"""Streams the link needs, re-requested while they do not flow."""
+
+
+def statustext_line(severity: int, text: Any) -> str:
+    """``"SEVERITY: text"`` of a STATUSTEXT (``"WARNING: PreArm: Need 3D Fix"``)."""
+    from pymavlink import mavutil
+
+    sev = mavutil.mavlink.enums["MAV_SEVERITY"].get(int(severity))
+    name = sev.name.removeprefix("MAV_SEVERITY_") if sev is not None else f"SEVERITY {int(severity)}"
+    body = text.decode(errors="replace") if isinstance(text, bytes) else str(text)
+    return f"{name}: {body.rstrip(chr(0)).strip()}"
+
+
+def _check(msg_type: str, values: dict[str, float], limit: float) -> str | None:
+    """The first field that is not finite or beyond ``|limit|``, as ``"TYPE.field: why"``."""
+    for name, v in values.items():
+        try:
+            f = float(v)
+        except (TypeError, ValueError):
+            return f"{msg_type}.{name}: not a number"
+        if not math.isfinite(f):
+            return f"{msg_type}.{name}: not finite ({f})"
+        if abs(f) > limit:
+            return f"{msg_type}.{name}: implausible ({f:g}, limit {limit:g})"
+    return None
+
+
+@dataclass
+class StatusLine:
+    number: int
+    time: float  # monotonic [s]
+    severity: int  # MAV_SEVERITY (0 emergency ... 7 debug)
+    text: str  # "SEVERITY: text"
+
+
+@dataclass
+class Vehicle:
+    """Latest valid telemetry of the vehicle (NED, as received) and link bookkeeping."""
+
+    system: int | None = None
+    component: int = 1
+    autopilot: int = 0
+    last_heartbeat: float = -math.inf  # monotonic [s]
+    custom_mode: int | None = None
+    base_mode: int = 0
+    system_status: int = 0
+    pos_ned: Vec3 | None = None  # last valid
+    pos_time: float = -math.inf  # monotonic [s] of the last valid position
+    vel_ned: Vec3 = (0.0, 0.0, 0.0)
+    yaw_ned: float = 0.0
+    landed_state: int = LANDED_UNDEFINED
+    battery: float | None = None
+    voltage: float | None = None
+    sensors_health: int | None = None  # SYS_STATUS.onboard_control_sensors_health
+    sensors_present: int | None = None
+    ekf_flags: int | None = None
+    last_boot_ms: int | None = None
+    origin: tuple[float, float, float] | None = None  # first GPS_GLOBAL_ORIGIN (lat deg, lon deg, alt m)
+    origin_now: tuple[float, float, float] | None = None
+    stream_time: dict[str, float] = field(default_factory=dict)  # message type -> monotonic [s]
+    invalid: dict[str, int] = field(default_factory=dict)  # message type -> count dropped
+    last_invalid: tuple[float, str] | None = None  # (monotonic [s], reason)
+    statustext: list[StatusLine] = field(default_factory=list)
+    statustext_count: int = 0
+    components: dict[tuple[int, int], tuple[int, int, float]] = field(default_factory=dict)
+    warnings: dict[str, str] = field(default_factory=dict)  # key -> text
+    epoch: int = 0
+    epoch_reason: str = ""
+    params: dict[str, float] = field(default_factory=dict)
+
+    @property
+    def armed(self) -> bool:
+        return bool(self.base_mode & 128)  # MAV_MODE_FLAG_SAFETY_ARMED
+
+
+class Telemetry:
+    """Decodes and validates the vehicle's messages (thread-safe; ``lock`` is a Condition).
+
+    Args:
+        source_system: The console's own MAVLink system id (a vehicle using it is warned about).
+        heartbeat_timeout: Heartbeat silence after which a new heartbeat counts as a reconnect [s].
+        autopilot_component: Component id of the autopilot (``None``: any non-peripheral).
+        max_range: Largest plausible |NED coordinate| [m].
+        max_speed: Largest plausible speed component [m/s].
+        on_epoch: Called (outside the lock) with the reason after a reboot / reconnect.
+    """
+
+    def __init__(self, source_system: int, heartbeat_timeout: float, autopilot_component: int | None = 1,
+                 max_range: float = 10_000.0, max_speed: float = 50.0,
+                 on_epoch: Callable[[str], None] | None = None) -> None:
+        self.source_system = source_system
+        self.heartbeat_timeout = heartbeat_timeout
+        self.autopilot_component = autopilot_component
+        self.max_range, self.max_speed = max_range, max_speed
+        self.on_epoch = on_epoch
+        self.lock = threading.Condition()
+        self.v = Vehicle()
+        self.acks: dict[int, tuple[Any, float]] = {}  # command -> (COMMAND_ACK, monotonic [s])
+        self.received = 0
+
+    # --- identity --------------------------------------------------------------------------------
+    def _is_autopilot(self, msg: Any) -> bool:
+        if int(msg.autopilot) == MAV_AUTOPILOT_INVALID or int(msg.type) in MAV_TYPE_NOT_VEHICLE:
+            return False
+        return self.autopilot_component is None or msg.get_srcComponent() == self.autopilot_component
+
+    def warn(self, key: str, text: str) -> None:
+        """Add a standing warning (once per key) and a ``WARNING: link: ...`` status line."""
+        with self.lock:
+            if self.v.warnings.get(key) == text:
+                return
+            self.v.warnings[key] = text
+            self._add_line(4, f"WARNING: link: {text}")
+        log.warning("%s", text)
+
+    def clear_warning(self, key: str) -> None:
+        with self.lock:
+            self.v.warnings.pop(key, None)
+
+    def _add_line(self, severity: int, text: str) -> None:
+        v = self.v
+        v.statustext_count += 1
+        v.statustext = (v.statustext + [StatusLine(v.statustext_count, time.monotonic(), severity, text)])[
+            -STATUSTEXT_KEPT:]
+
+    def _heartbeat(self, msg: Any, now: float) -> str | None:
+        v = self.v
+        src, comp = msg.get_srcSystem(), msg.get_srcComponent()
+        v.components[(src, comp)] = (int(msg.type), int(msg.autopilot), now)
+        if not self._is_autopilot(msg):
+            return None
+        if v.system is None:
+            v.system, v.component, v.autopilot = src, comp, int(msg.autopilot)
+            log.info("vehicle found: system %d component %d (autopilot type %d)", src, comp, v.autopilot)
+            if src == self.source_system:
+                self.v.warnings["sysid"] = (f"the vehicle uses system id {src}, the console's own: set the "
+                                            "vehicle's MAV_SYSID (or the console's) to another value")
+                self._add_line(4, "WARNING: link: " + self.v.warnings["sysid"])
+        elif src != v.system:
+            key = f"vehicle{src}"
+            if key not in v.warnings:
+                v.warnings[key] = (f"a second vehicle (system {src}, component {comp}) is on this link: ignored; "
+                                   f"the console follows system {v.system}")
+                self._add_line(4, "WARNING: link: " + v.warnings[key])
+            return None
+        if comp != v.component:
+            return None
+        reason = None
+        if v.last_heartbeat > -math.inf and now - v.last_heartbeat > self.heartbeat_timeout:
+            reason = f"heartbeat back after {now - v.last_heartbeat:.1f} s of silence"
+        v.last_heartbeat = now
+        v.custom_mode = int(msg.custom_mode)
+        v.base_mode = int(msg.base_mode)
+        v.system_status = int(msg.system_status)
+        return reason
+
+    # --- receiving -------------------------------------------------------------------------------
+    def handle(self, msg: Any) -> None:
+        """Take one received message (any source)."""
+        kind = msg.get_type()
+        if kind == "BAD_DATA":
+            return
+        now = time.monotonic()
+        epoch_reason = None
+        with self.lock:
+            v = self.v
+            if kind == "HEARTBEAT":
+                epoch_reason = self._heartbeat(msg, now)
+            elif v.system is not None and msg.get_srcSystem() == v.system:
+                if kind == "STATUSTEXT":  # any component of the vehicle may explain itself
+                    self._add_line(int(msg.severity), statustext_line(msg.severity, msg.text))
+                elif msg.get_srcComponent() == v.component:
+                    self.received += 1
+                    epoch_reason = self._telemetry(kind, msg, now)
+            if epoch_reason:
+                v.epoch += 1
+                v.epoch_reason = epoch_reason
+            self.lock.notify_all()
+        if epoch_reason:
+            log.warning("vehicle %s", epoch_reason)
+            if self.on_epoch is not None:
+                self.on_epoch(epoch_reason)
+
+    def _drop(self, kind: str, reason: str, now: float) -> None:
+        v = self.v
+        v.invalid[kind] = v.invalid.get(kind, 0) + 1
+        if v.last_invalid is None or v.last_invalid[1] != reason or v.invalid[kind] in (1, 10, 100, 1000):
+            log.warning("dropped invalid %s (%s), %d so far", kind, reason, v.invalid[kind])
+        v.last_invalid = (now, reason)
+
+    def _telemetry(self, kind: str, msg: Any, now: float) -> str | None:
+        """Validate and store one message of the vehicle; returns a reboot reason or None."""
+        v = self.v
+        v.stream_time[kind] = now
+        epoch = None
+        boot = getattr(msg, "time_boot_ms", None)
+        if isinstance(boot, int) and kind in ("LOCAL_POSITION_NED", "ATTITUDE"):
+            if v.last_boot_ms is not None and boot + 1000 < v.last_boot_ms:
+                epoch = f"rebooted (time_boot_ms went back from {v.last_boot_ms / 1000:.1f} s to {boot / 1000:.1f} s)"
+            v.last_boot_ms = boot
+        if kind == "LOCAL_POSITION_NED":
+            bad = (_check(kind, {"x": msg.x, "y": msg.y, "z": msg.z}, self.max_range)
+                   or _check(kind, {"vx": msg.vx, "vy": msg.vy, "vz": msg.vz}, self.max_speed))
+            if bad:
+                self._drop(kind, bad, now)
+            else:
+                v.pos_ned = (float(msg.x), float(msg.y), float(msg.z))
+                v.vel_ned = (float(msg.vx), float(msg.vy), float(msg.vz))
+                v.pos_time = now
+        elif kind == "ATTITUDE":
+            bad = _check(kind, {"yaw": msg.yaw}, 2 * math.pi + 0.01)
+            if bad:
+                self._drop(kind, bad, now)
+            else:
+                v.yaw_ned = float(msg.yaw)
+        elif kind == "EXTENDED_SYS_STATE":
+            if int(msg.landed_state) not in range(5):
+                self._drop(kind, f"{kind}.landed_state: unknown value {int(msg.landed_state)}", now)
+            else:
+                v.landed_state = int(msg.landed_state)
+        elif kind == "SYS_STATUS":
+            remaining = int(msg.battery_remaining)
+            if not -1 <= remaining <= 100:
+                self._drop(kind, f"{kind}.battery_remaining: out of range ({remaining})", now)
+            else:
+                v.battery = None if remaining < 0 else remaining / 100.0
+                v.voltage = None if msg.voltage_battery in (0, 65535) else msg.voltage_battery / 1000.0
+                v.sensors_health = int(msg.onboard_control_sensors_health)
+                v.sensors_present = int(msg.onboard_control_sensors_present)
+        elif kind == "EKF_STATUS_REPORT":
+            v.ekf_flags = int(msg.flags)
+        elif kind == "COMMAND_ACK":
+            self.acks[int(msg.command)] = (msg, now)
+        elif kind == "PARAM_VALUE":
+            name = msg.param_id.decode(errors="replace") if isinstance(msg.param_id, bytes) else str(msg.param_id)
+            if math.isfinite(float(msg.param_value)):
+                v.params[name.rstrip("\x00")] = float(msg.param_value)
+        elif kind == "GPS_GLOBAL_ORIGIN":
+            lat, lon, alt = msg.latitude / 1e7, msg.longitude / 1e7, msg.altitude / 1000.0
+            if abs(lat) > 90 or abs(lon) > 180 or not math.isfinite(alt):
+                self._drop(kind, f"{kind}: latitude/longitude out of range ({lat}, {lon})", now)
+            else:
+                self._origin((lat, lon, alt))
+        return epoch
+
+    def _origin(self, origin: tuple[float, float, float]) -> None:
+        v = self.v
+        v.origin_now = origin
+        if v.origin is None:
+            v.origin = origin
+            return
+        north = math.radians(origin[0] - v.origin[0]) * 6_378_137.0
+        east = math.radians(origin[1] - v.origin[1]) * 6_378_137.0 * math.cos(math.radians(v.origin[0]))
+        up = origin[2] - v.origin[2]
+        moved = math.sqrt(north ** 2 + east ** 2 + up ** 2)
+        if moved > 0.1:
+            text = (f"the vehicle's EKF origin moved {moved:.1f} m (north {north:+.1f}, east {east:+.1f} m) "
+                    "since the link opened: world positions are off by that much until --ned-origin is "
+                    "corrected")
+            if v.warnings.get("origin") != text:
+                v.warnings["origin"] = text
+                self._add_line(4, "WARNING: link: " + text)
+        else:
+            v.warnings.pop("origin", None)
+
+    # --- queries ---------------------------------------------------------------------------------
+    def stream_age(self, kind: str) -> float:
+        """Seconds since the last ``kind`` message of the vehicle (valid or not; ``inf`` if never)."""
+        with self.lock:
+            return time.monotonic() - self.v.stream_time.get(kind, -math.inf)
+
+    def heartbeat_age(self) -> float:
+        with self.lock:
+            return time.monotonic() - self.v.last_heartbeat
+
+    def pose_age(self) -> float:
+        """Seconds since the last valid LOCAL_POSITION_NED (``inf`` before the first)."""
+        with self.lock:
+            return time.monotonic() - self.v.pos_time
+
+    def lines_between(self, start: float, end: float) -> list[StatusLine]:
+        """STATUSTEXT lines received in the monotonic interval [start, end]."""
+        with self.lock:
+            return [s for s in self.v.statustext if start <= s.time <= end]
+
+    def readiness(self, pose_timeout: float) -> str:
+        """``""`` when the vehicle can take off, else why not (position, EKF, pre-arm)."""
+        with self.lock:
+            v = self.v
+            why = []
+            if v.pos_ned is None:
+                why.append("no position estimate yet (no LOCAL_POSITION_NED)")
+            elif time.monotonic() - v.pos_time > pose_timeout:
+                why.append("position stale")
+            if v.ekf_flags is not None and (not v.ekf_flags & (EKF_POS_HORIZ_REL | EKF_POS_HORIZ_ABS)
+                                            or v.ekf_flags & EKF_CONST_POS_MODE):
+                why.append("EKF has no horizontal position")
+            prearm_known = v.sensors_present is not None and v.sensors_present & MAV_SYS_STATUS_PREARM_CHECK
+            if prearm_known and not (v.sensors_health or 0) & MAV_SYS_STATUS_PREARM_CHECK and not v.armed:
+                recent = [s.text.split(": ", 1)[-1] for s in v.statustext
+                          if "PreArm:" in s.text and time.monotonic() - s.time < 30.0]
+                why.append("pre-arm checks failing" + (f" ({recent[-1]})" if recent else ""))
+            return "; ".join(why)
+
+
+__all__ = ["Telemetry", "Vehicle", "StatusLine", "statustext_line", "TRACKED", "LANDED_UNDEFINED",
+           "LANDED_ON_GROUND", "LANDED_IN_AIR", "LANDED_TAKEOFF", "LANDED_LANDING"]
