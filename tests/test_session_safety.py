@@ -305,3 +305,38 @@ def test_a_capture_with_an_implausible_object_is_refused_before_anything_changes
     assert "refused" in err and "objects[0].size[2]: 900 m is implausible" in err and "internal error" not in err
     assert notices.titled("Capture & map failed")
     assert planned.scene is before and planned.capture is None and planned.mission is not None
+
+
+def test_the_undo_button_names_the_step_and_undoes_it(tmp_path: Path) -> None:
+    import viser
+
+    from console.objects_view import ObjectsView
+
+    server = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
+    try:
+        s = Session(tmp_path / "s", start=START)
+        view = ObjectsView(server, s)
+        assert view._undo.disabled
+        s.spawn(_boxes(), origin="file room.json")
+        s.delete_object("box-4")
+        assert not view._undo.disabled and view._undo.label == "Undo delete box-4"
+
+        told: list[str] = []
+
+        class Tab:
+            def add_notification(self, title: str, body: str, **_kw: object) -> None:
+                told.append(f"{title}: {body}")
+
+        class Click:
+            client = Tab()
+
+        view._on_undo(Click())
+        assert "box-4" in {o.id for o in s.scene.objects} and view._undo.label == "Undo spawn from file room.json"
+        view._on_undo(Click())
+        assert s.scene.objects == () and view._undo.disabled and view.drawn_ids() == []
+        view._on_undo(Click())  # nothing left: refused and said to the tab
+        assert s.scene.objects == ()
+        assert told == ["Undone: delete box-4", "Undone: spawn from file room.json",
+                        "Cannot undo: nothing to undo: no map edit since the console started"]
+    finally:
+        server.stop()
