@@ -25,6 +25,7 @@ import numpy as np
 import pytest
 
 from console.app import ConsoleApp, ConsoleConfig, wait_until
+from console.objects_view import NONE_CHOICE
 from console.picking import ray_plane, top_view
 from test_console_e2e import BROWSER_ARGS, CHROMIUM, VIEWPORT, _project, _ray_hits_box, console, needs_browser  # noqa: F401
 
@@ -128,6 +129,13 @@ def test_goals_go_through_objects_typed_goals_top_view_and_the_disconnected_bann
             assert goal[2] == 0.0 and math.dist(goal[:2], target[:2]) < 0.3, (goal, target)
             assert session.selected is None, f"{session.selected.id} was selected instead"
             assert wait_until(lambda: "drops" not in app.views["paths"].drawn(), 10)  # a floor goal needs no drop line
+            # its notice sits at the bottom right of the 3D view, clear of its centre and upper left
+            note = page.locator(".mantine-Notification-root", has_text="Candidate path").first
+            note.wait_for(timeout=30_000)
+            nb, canvas = note.bounding_box(), page.locator("canvas").first.bounding_box()
+            assert nb is not None and canvas is not None
+            assert nb["x"] > canvas["x"] + canvas["width"] / 2 and nb["y"] > canvas["y"] + canvas["height"] / 2, (nb, canvas)
+            assert nb["x"] + nb["width"] <= canvas["x"] + canvas["width"] + 1, (nb, canvas)
 
             # --- altitude mode: a click on an object gives a goal in the air in front of it --------------
             session.set_goal_mode("altitude", 1.5)
@@ -140,6 +148,19 @@ def test_goals_go_through_objects_typed_goals_top_view_and_the_disconnected_bann
             assert math.dist(goal[:2], hit[:2]) < 0.3 and session.selected is None, (goal, hit, session.selected)
             assert wait_until(lambda: "drops" in app.views["paths"].drawn(), 10)  # the air goal's drop line
             session.set_goal_mode("ground")
+
+            # --- Shift-click selects (highlighted, in the list); Deselect clears the list ------------------
+            page.keyboard.down("Shift")
+            click(opx)
+            page.keyboard.up("Shift")
+            assert wait_until(lambda: session.selected is not None and session.selected.id == obj.id, 30), session.selected
+            objects = app.views["objects"]
+            assert wait_until(lambda: objects.highlighted() == obj.id and objects.chooser_value() == obj.id, 10)
+            chooser = page.get_by_label("Select object")
+            page.wait_for_function("([el, v]) => el.value === v", arg=[chooser.element_handle(), obj.id], timeout=30_000)
+            page.get_by_role("button", name="Deselect").click()
+            assert wait_until(lambda: session.selected is None and objects.highlighted() is None, 30)
+            page.wait_for_function("([el, v]) => el.value === v", arg=[chooser.element_handle(), NONE_CHOICE], timeout=30_000)
 
             # --- a typed goal ---------------------------------------------------------------------------
             first = page.get_by_label("Goal x, y, z [m]")
