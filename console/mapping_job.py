@@ -23,6 +23,7 @@ from typing import Any, Callable, Protocol
 
 import numpy as np
 
+from pipeline.map_fusion import fuse
 from pipeline.scene import Scene
 
 from .link.base import CaptureResult
@@ -93,6 +94,36 @@ class MappingJob:
         self.perceiver = perceiver
         self._lock = threading.Lock()
         self._thread: threading.Thread | None = None
+        self._held: tuple[Scene, str] | None = None
+
+    @property
+    def held(self) -> str | None:
+        """Id of the capture held back for disagreeing with the map, ``None`` if none is."""
+        with self._lock:
+            return None if self._held is None else self._held[1]
+
+    def resolve_held(self, action: str) -> str:
+        """The operator's answer to a held-back capture: ``merge`` it into the map anyway, ``replace``
+        the map's objects (all but the pinned ones) with it, or ``discard`` it; returns what was done.
+
+        Raises:
+            SessionError: No capture is held back, an unknown action, or the session refused it.
+        """
+        if action not in ("merge", "replace", "discard"):
+            raise SessionError(f"action must be merge, replace or discard, got {action!r}")
+        with self._lock:
+            held, self._held = self._held, None
+        if held is None:
+            raise SessionError("no capture is held back")
+        scene, cap_id = held
+        if action == "discard":
+            return f"capture {cap_id} discarded"
+        if action == "replace":
+            for obj in self._session.scene.objects:
+                if not obj.is_pinned:
+                    self._session.delete_object(obj.id)
+        report = self._session.spawn(scene, origin=f"capture {cap_id}")
+        return f"capture {cap_id}: {len(report.added)} new, {len(report.updated)} updated ({action})"
 
     @property
     def running(self) -> bool:
@@ -155,13 +186,26 @@ class MappingJob:
                 robot_pose=shot.robot_pose, detections=result.detections, depth=result.depth,
                 backend=self.perceiver.label, timings=timings, timestamp=shot.timestamp,
             ))
+            # the fusion is pure: a dry run against the map says what will happen to each object and
+            # whether the capture agrees with the map at all (the session's merge never holds back)
+            _, preview = fuse(self._session.scene, result.scene)
+            if preview.held_back:
+                with self._lock:
+                    self._held = (result.scene, cap_id)
+                text = f"capture {cap_id} held back: {preview.held_back}"
+                self._session.set_job(JobStatus(JOB_NAME, False, 1.0, text))
+                self._session.notify("Capture held back", f"{text} The map is unchanged: merge it anyway, replace "
+                                     "the map with it, or discard it.", "warning")
+                return True
             report = self._session.spawn(result.scene, origin=f"capture {cap_id}")
             dt = time.perf_counter() - t0
-            summary = (f"{n} objects seen ({len(report.added)} new, {len(report.updated)} updated) "
-                       f"in {dt:.1f} s")
+            rejected = preview.rejected
+            summary = (f"{n} objects seen ({len(report.added)} new, {len(report.updated)} updated"
+                       + (f", {len(rejected)} not used" if rejected else "") + f") in {dt:.1f} s")
             self._session.set_job(JobStatus(JOB_NAME, False, 1.0, summary))
-            body = summary + ("; " + "; ".join(report.notes) if report.notes else "")
-            self._session.notify("Mapped", body, "success")
+            notes = preview.notes() + list(report.notes)
+            body = summary + ("; " + "; ".join(notes) if notes else "")
+            self._session.notify("Mapped", body, "warning" if rejected else "success")
             return True
         except (MappingError, SessionError) as exc:  # SessionError: e.g. an implausible object refused
             self._session.set_job(JobStatus(JOB_NAME, False, 0.0, "failed", str(exc)))
