@@ -206,6 +206,10 @@ class MappingJob:
             notes = preview.notes() + list(report.notes)
             body = summary + ("; " + "; ".join(notes) if notes else "")
             self._session.notify("Mapped", body, "warning" if rejected else "success")
+            from pipeline.pose_check import floor_check
+
+            for warning in floor_check(result.scene):  # objects under the floor / floating: a wrong camera pose
+                self._session.notify("Check the camera pose", f"capture {cap_id}: {warning}", "warning")
             return True
         except (MappingError, SessionError) as exc:  # SessionError: e.g. an implausible object refused
             self._session.set_job(JobStatus(JOB_NAME, False, 0.0, "failed", str(exc)))

@@ -1,0 +1,71 @@
+"""Sanity check of the camera pose from where one photo's objects land against the floor.
+
+Objects of known size stand on the floor (or on furniture): none can be under it, and a photo
+whose every object floats clearly above it is unlikely. Both happen when the camera pose used for
+the photo is wrong: a camera mounted higher, lower, or tilted differently from what the camera
+file (``[mount]`` ``position`` z, ``pitch_deg``) or the photo's ``camera_height`` / ``gravity_cam``
+says. :func:`floor_check` returns warnings naming that likely cause; it never changes the scene.
+
+World frame, z up, the floor at ``floor_z`` [m] (the planner's ground, z = 0 by default).
+"""
+
+from __future__ import annotations
+
+import statistics
+from typing import Sequence
+
+from pipeline.scene import Scene, SceneObject
+
+UNDER_LIMIT = 0.15
+"""The photo's ground level this far [m] under the floor is reported (mapping noise stays within it)."""
+FLOAT_LIMIT = 0.2
+"""The photo's ground level this high [m] over the floor is reported."""
+FEW = 4
+"""With fewer known-size objects, the lowest one is the ground level (and must be clearly off)."""
+
+CAUSE = ("the camera pose used for this photo is probably wrong: check the camera's mount height and pitch "
+         "(camera.toml [mount] position z and pitch_deg, or the photo's camera_height and gravity_cam)")
+
+
+def _bottoms(objects: Sequence[SceneObject], floor_z: float) -> list[tuple[str, float]]:
+    return [(o.label, float(o.position[2]) - float(o.size[1]) / 2.0 - floor_z)
+            for o in objects if o.frame == "world" and o.size_known]
+
+
+def floor_check(scene: Scene, floor_z: float = 0.0, *, under_limit: float = UNDER_LIMIT,
+                float_limit: float = FLOAT_LIMIT) -> list[str]:
+    """Warnings (empty when plausible) when the photo's objects stand under the floor or float over it.
+
+    The photo's *ground level* is the lower quartile of its known-size objects' box bottoms (the
+    lowest objects of a room stand on the floor; single objects cut by the image border or hidden
+    behind others land off it by up to ~0.2 m even with the right pose, so one object proves
+    nothing); with fewer than :data:`FEW` objects it is the lowest bottom, judged with 1.5x the limits.
+
+    Args:
+        scene: One photo's objects in the world frame (known-size objects are judged).
+        floor_z: Height of the floor in the world frame [m].
+        under_limit: Ground level this far under the floor [m] is reported.
+        float_limit: Ground level this far over the floor [m] is reported (two or more objects).
+    """
+    bottoms = _bottoms(scene.objects, floor_z)
+    if not bottoms:
+        return []
+    values = sorted(b for _, b in bottoms)
+    if len(values) >= FEW:
+        ground = float(statistics.quantiles(values, n=4, method="inclusive")[0])
+        what = "the lower quartile of the box bottoms"
+        under_at, float_at = under_limit, float_limit
+    else:
+        ground = values[0]
+        what = "the lowest box bottom"
+        under_at, float_at = 1.5 * under_limit, 1.5 * float_limit
+    if ground < -under_at:
+        under = sorted((b, label) for label, b in bottoms if b < -under_at)
+        named = ", ".join(f"{label} {b:+.2f} m" for b, label in under[:4])
+        return [f"objects land under the floor ({what} is {-ground:.2f} m under it; {named}): {CAUSE}"]
+    if len(values) >= 2 and ground > float_at:
+        return [f"objects float over the floor ({what} is {ground:.2f} m over it, none stands on it): {CAUSE}"]
+    return []
+
+
+__all__ = ["CAUSE", "floor_check"]
