@@ -101,6 +101,7 @@ class PathsView:
                                          "Clear: remove every path and the mission")
         gui.add_markdown(legend_html())
 
+        self._alt.disabled = s.goal_mode != "altitude"
         self._click.on_update(self._on_click_toggle)
         add.on_click(self._on_typed_goal)
         view.on_click(lambda e: self.set_view(e.client, str(e.target.value)))
