@@ -12,6 +12,12 @@ camera distance [%], the objects mapped outside the 5 x 8 x 3 m workspace and th
 [deg] of the objects with a clear length axis (hidden size ``|l - w| > 0.2 m``; yaw = heading of the
 length axis about world z, see :mod:`pipeline.scene`). ``--compare`` also maps without the yaw from
 depth points (``MapperConfig(yaw_from_depth=False)``: every object faces the camera).
+
+``--tour [--noise] [--seed N]`` is the map-fusion benchmark of issue 12 (see :mod:`bench.sim_tour`):
+the robot captures from :data:`bench.sim_tour.TOUR` (10 poses: the good ones plus a close-up of a desk
+and views with objects cut by the border) and the captures are folded into one map by
+:func:`pipeline.map_fusion.fuse` and, in the same run, by the merge the console used before
+(``bench/legacy_merge.py``: newest estimate wins).
 """
 
 from __future__ import annotations
@@ -103,6 +109,11 @@ def measure(config: MapperConfig | None = None) -> dict[str, float]:
 
 
 if __name__ == "__main__":
+    if "--tour" in sys.argv[1:]:
+        from sim_tour import main as tour_main  # noqa: E402
+
+        tour_main(sys.argv[1:])
+        sys.exit(0)
     if "--compare" in sys.argv[1:]:
         print("without yaw from depth points (every object faces the camera):")
         measure(MapperConfig(yaw_from_depth=False))
