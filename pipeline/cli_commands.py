@@ -106,16 +106,24 @@ def _catalog(args: argparse.Namespace) -> Catalog:
 
 def cmd_map(args: argparse.Namespace) -> int:
     """``morphonavi map IMAGE --camera CAMERA.toml [--pose x,y,z,yaw] [--prompts ...] --out scene.json``."""
-    from pipeline.geometry import Pose, load_camera_toml, parse_pose
+    from pipeline.camera_guess import assumed_camera
+    from pipeline.geometry import CameraConfig, Pose, load_camera_toml, parse_pose
     from pipeline.image_io import read_image
     from pipeline.mapper import Mapper, prompts_from_words
 
-    camera = load_camera_toml(args.camera)
+    if args.camera is not None and args.fov is not None:
+        raise _UserError("--fov is for photos without a camera file; the camera file's intrinsics are used")
+    camera = load_camera_toml(args.camera) if args.camera is not None else None
     pose = parse_pose(args.pose, "--pose") if args.pose is not None else Pose()
     loaded = read_image(args.image)
     if loaded.note:
         print(loaded.note)
     image = loaded.image
+    assumed = None
+    if camera is None:  # uncalibrated: a documented default, flagged in the output and the scene
+        assumed = assumed_camera(image.shape[1], image.shape[0], hfov_deg=args.fov, focal_35mm=loaded.focal_35mm)
+        camera = CameraConfig(assumed.intrinsics)
+        print(f"warning: {assumed.warning}")
     catalog = _catalog(args)
     if args.prompts is not None:
         prompts_from_words(catalog, args.prompts)  # empty list -> error before loading models
@@ -130,6 +138,12 @@ def cmd_map(args: argparse.Namespace) -> int:
         result = mapper.run(image, camera.intrinsics, camera.mount, pose, prompts=args.prompts,
                             image_name=Path(args.image).name)
     scene = result.scene
+    if assumed is not None:
+        import dataclasses
+
+        flag = f"assumed from {assumed.how}, +-{assumed.rel_sigma:.0%}"
+        scene = dataclasses.replace(scene, captures=tuple(
+            dataclasses.replace(c, models={**dict(c.models), "intrinsics": flag}) for c in scene.captures))
     debug_files: list[Path] = []
     if args.debug:
         from pipeline.debug_images import write_debug_images
@@ -160,7 +174,12 @@ def add_map_parser(subparsers: Any) -> argparse.ArgumentParser:
         description="Detect, segment and place the objects of one photo; write the scene JSON (world frame).",
     )
     p.add_argument("image", help="photo (JPEG, PNG, ...)")
-    p.add_argument("--camera", required=True, type=Path, help="camera.toml: intrinsics [px] for this image size and mount")
+    p.add_argument("--camera", "--camera-file", type=Path, default=None, metavar="CAMERA.toml",
+                   help="camera.toml: intrinsics [px] for the upright image and mount (morphonavi calibrate writes "
+                        "one). Without it the intrinsics are ASSUMED (--fov, else the photo's EXIF 35 mm focal "
+                        "length, else a 65 deg lens; flagged, with their uncertainty) and the mount is the default")
+    p.add_argument("--fov", type=float, default=None, metavar="DEG",
+                   help="without --camera: the lens's horizontal field of view [deg]")
     p.add_argument("--pose", default=None, help="robot pose at capture 'x,y[,z[,yaw_deg]]' (world frame, metres, degrees)")
     p.add_argument("--prompts", nargs="*", default=None, metavar="WORD",
                    help="what to look for (default: the catalog's prompts)")

@@ -59,12 +59,15 @@ class LoadedImage:
         orientation: The EXIF Orientation tag (1..8) when the file has one, else ``None``.
         stored_size: ``(width, height)`` of the pixel grid as stored in the file [px].
         label: How the image is named in messages.
+        focal_35mm: The EXIF ``FocalLengthIn35mmFilm`` [mm] when the file has it (for an assumed
+            camera, see :mod:`pipeline.camera_guess`), else ``None``.
     """
 
     image: np.ndarray
     orientation: int | None
     stored_size: tuple[int, int]
     label: str
+    focal_35mm: float | None = None
 
     @property
     def size(self) -> tuple[int, int]:
@@ -130,6 +133,24 @@ def _exif_orientation(pil_image: object) -> int | None:
     except Exception:  # noqa: BLE001 - a broken EXIF block is treated as no tag
         return None
     return int(value) if isinstance(value, int) and 1 <= value <= 8 else None
+
+
+def _exif_focal_35mm(data: bytes) -> float | None:
+    """EXIF ``FocalLengthIn35mmFilm`` [mm] (Exif IFD tag 0xA405), or ``None``."""
+    try:
+        from PIL import Image
+
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            with Image.open(io.BytesIO(data)) as im:
+                value = im.getexif().get_ifd(0x8769).get(0xA405)
+    except Exception:  # noqa: BLE001 - no readable EXIF: no focal length
+        return None
+    try:
+        f = float(value)
+    except (TypeError, ValueError):
+        return None
+    return f if 4.0 <= f <= 2000.0 else None
 
 
 def _check_side(w: int, h: int, label: str, max_side: int) -> None:
@@ -214,7 +235,8 @@ def read_image(source: str | os.PathLike[str] | bytes | bytearray | memoryview, 
     else:
         stored, orientation = _decode_other(data, label, max_side)
     upright = np.ascontiguousarray(apply_orientation(stored, orientation))
-    return LoadedImage(upright, orientation, (int(stored.shape[1]), int(stored.shape[0])), label)
+    return LoadedImage(upright, orientation, (int(stored.shape[1]), int(stored.shape[0])), label,
+                       _exif_focal_35mm(data))
 
 
 def load_image(source: str | os.PathLike[str] | bytes | bytearray | memoryview, *, name: str | None = None,
