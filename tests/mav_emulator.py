@@ -113,6 +113,8 @@ class ArduCopterEmulator:
         self.telemetry_enabled = True
         self.corrupt: dict[str, float] = {}
         self.blocked = False
+        self.frozen = False  # like a stopped process: silent, no physics, incoming handled late
+        self.refuse_commands: set[int] = set()  # answered MAV_RESULT_UNSUPPORTED
         self.deny_modes: dict[str, int] = {}
         self.ignore_commands: set[int] = set()
         self.prearm_failure: str | None = None
@@ -187,7 +189,7 @@ class ArduCopterEmulator:
         return self.drop > 0 and self._rng.random() < self.drop
 
     def _silent(self) -> bool:
-        return self.blocked or time.monotonic() < self._silent_until
+        return self.blocked or self.frozen or time.monotonic() < self._silent_until
 
     def _send(self, name: str, *args: Any) -> None:
         if self._silent():
@@ -228,7 +230,7 @@ class ArduCopterEmulator:
                 if time.monotonic() < self._silent_until:
                     continue  # rebooting: nothing is heard
                 with self.lock:
-                    if self.blocked:
+                    if self.blocked or self.frozen:
                         self._queue.append(msg)
                         continue
                     if self._queue:  # delivered late, in order, like TCP after a block
@@ -239,7 +241,7 @@ class ArduCopterEmulator:
                     self._handle(msg)
             now = time.monotonic()
             with self.lock:
-                if not self.blocked and self._queue:
+                if not (self.blocked or self.frozen) and self._queue:
                     queued, self._queue = self._queue, []
                     self.record.late += len(queued)
                     for m in queued:
@@ -267,6 +269,11 @@ class ArduCopterEmulator:
         return max(0, int((time.monotonic() - self._boot) * 1000))
 
     def _heartbeats(self, autopilot: bool) -> None:
+        if autopilot and self.heartbeat_enabled:
+            base = mav.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED | (mav.MAV_MODE_FLAG_SAFETY_ARMED if self.armed else 0)
+            status = mav.MAV_STATE_ACTIVE if self.armed else mav.MAV_STATE_STANDBY
+            self._send("heartbeat_send", mav.MAV_TYPE_QUADROTOR, mav.MAV_AUTOPILOT_ARDUPILOTMEGA, base,
+                       MODES[self.mode], status)
         for comp, mtype, ap in self.components:
             self._send_as(self.system, comp, "heartbeat_send", mtype, ap, 0, 0, mav.MAV_STATE_ACTIVE)
             self._send_as(self.system, comp, "attitude_send", self._ms(), 0.0, 0.3, 1.0, 0.0, 0.0, 0.0)
@@ -274,12 +281,6 @@ class ArduCopterEmulator:
             self._send_as(other, 1, "heartbeat_send", mav.MAV_TYPE_QUADROTOR, mav.MAV_AUTOPILOT_ARDUPILOTMEGA,
                           mav.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED, MODES["LOITER"], mav.MAV_STATE_STANDBY)
             self._send_as(other, 1, "local_position_ned_send", self._ms(), 9.0, 9.0, -3.0, 0.0, 0.0, 0.0)
-        if not (autopilot and self.heartbeat_enabled):
-            return
-        base = mav.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED | (mav.MAV_MODE_FLAG_SAFETY_ARMED if self.armed else 0)
-        status = mav.MAV_STATE_ACTIVE if self.armed else mav.MAV_STATE_STANDBY
-        self._send("heartbeat_send", mav.MAV_TYPE_QUADROTOR, mav.MAV_AUTOPILOT_ARDUPILOTMEGA, base,
-                   MODES[self.mode], status)
 
     def _telemetry(self) -> None:
         with self.lock:
@@ -329,6 +330,8 @@ class ArduCopterEmulator:
         self.record.received.append((cmd, conf))
         if cmd in self.ignore_commands:
             return
+        if cmd in self.refuse_commands:
+            return self._ack(cmd, mav.MAV_RESULT_UNSUPPORTED, conf)
         if cmd == mav.MAV_CMD_DO_SET_MODE:
             name = NAMES.get(int(m.param2))
             if name is None:
@@ -453,7 +456,7 @@ class ArduCopterEmulator:
             self.pos = list(self.target)
 
     def _physics(self, dt: float) -> None:
-        if dt <= 0 or time.monotonic() < self._silent_until:
+        if dt <= 0 or self.frozen or time.monotonic() < self._silent_until:
             return
         ls = self.landed_state
         if self.freeze_motion:

@@ -583,8 +583,12 @@ class MissionManager:
         return self.link.link_age_now() <= self.failsafe_after
 
     def _robot_now(self) -> str:
-        """What the robot is really doing, from a fresh state sample."""
+        """What the robot is really doing, from a fresh state sample (waits briefly for one)."""
+        end = time.monotonic() + 1.0
         st = self.link.latest_state()
+        while (st is None or not (st.link_ok and st.position_valid)) and time.monotonic() < end:
+            time.sleep(self.poll)
+            st = self.link.latest_state()
         if st is None:
             return "no robot state"
         where = "on the ground" if st.landed else "in the air"

@@ -7,7 +7,8 @@ Connection strings are pymavlink's: ``udpin:0.0.0.0:14550`` (listen; what ArduPi
 - :class:`MavTransport` opens the connection, runs the receive thread (every message goes to a
   handler) and a 1 Hz GCS HEARTBEAT, and records the session as a ``.tlog`` (pymavlink's own
   log format: 8-byte big-endian microsecond timestamp + the MAVLink packet, received messages
-  through pymavlink's ``setup_logfile``, sent ones through the encoder's send callback; Mission
+  through pymavlink's ``setup_logfile`` (its UDP path skips that file, so UDP messages are
+  appended by the receive thread), sent ones through the encoder's send callback; Mission
   Planner, QGroundControl, MAVExplorer and ``mavutil.mavlink_connection(path)`` read it);
 - :class:`StreamKeeper` keeps the telemetry streams flowing: ``MAV_CMD_SET_MESSAGE_INTERVAL``
   checked by its COMMAND_ACK, falling back to ``REQUEST_DATA_STREAM`` when the vehicle refuses it,
@@ -115,6 +116,7 @@ class MavTransport:
         self._hb_now = threading.Event()
         self._threads: list[threading.Thread] = []
         self.sent = 0
+        self._log_received = False
 
     @property
     def is_open(self) -> bool:
@@ -145,7 +147,9 @@ class MavTransport:
             try:
                 self.tlog = tlog_path(self.tlog_request)
                 self.conn.setup_logfile(str(self.tlog))  # received messages, timestamped by pymavlink
-                self.conn.mav.set_send_callback(self._log_sent)  # and what we send
+                self.conn.mav.set_send_callback(self._log, "sent")  # and what we send
+                # pymavlink's UDP receive path skips the logfile: those messages are written here
+                self._log_received = type(self.conn).recv_msg is not mavutil().mavfile.recv_msg
             except OSError as exc:
                 log.error("cannot record the MAVLink session to %s: %s", self.tlog_request, exc)
                 self.tlog = None
@@ -155,7 +159,8 @@ class MavTransport:
             t.start()
             self._threads.append(t)
 
-    def _log_sent(self, msg: Any) -> None:
+    def _log(self, msg: Any, why: str = "received") -> None:
+        """Append one message to the .tlog (8-byte big-endian microseconds + the packet)."""
         f = getattr(self.conn, "logfile", None)
         if f is not None:
             try:
@@ -224,6 +229,8 @@ class MavTransport:
                 self.stop.wait(0.2)
                 continue
             if msg is not None:
+                if self._log_received and msg.get_type() != "BAD_DATA":
+                    self._log(msg)
                 try:
                     self.on_message(msg)
                 except Exception:  # one odd message must not stop the link
@@ -271,6 +278,8 @@ class StreamKeeper:
     def renew(self) -> None:
         """After a reboot / reconnect: request everything again now and re-read the origin."""
         self._last.clear()
+        with self.tel.lock:
+            self.tel.v.origin_now = None  # re-read: a rebooted vehicle sets a new EKF origin
         self.want_origin = True
         self._origin_asked = 0.0
         self._wake.set()

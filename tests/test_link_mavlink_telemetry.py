@@ -1,0 +1,266 @@
+"""MAVLink telemetry you can trust, each fault injected into the ArduCopter emulator over UDP:
+validation (NaN / inf / implausible fields), unknown position, staleness, reboot, stream requests
+refused, vehicle identity (gimbal / camera first, system ids), readiness, the .tlog."""
+
+from __future__ import annotations
+
+import math
+import time
+
+import pytest
+from pymavlink import mavutil
+
+from console.link.base import Mode, RunStatus
+from console.link.manager import MissionManager, MissionStatus
+from mav_helpers import ORIGIN, config, eventually, events, vehicle
+from planner.mission import Mission, MissionSegment, SegmentKind
+
+mav = mavutil.mavlink
+WALK, TAKEOFF, FLY, LAND = SegmentKind.WALK, SegmentKind.TAKEOFF, SegmentKind.FLY, SegmentKind.LAND
+NAN, INF = float("nan"), float("inf")
+
+
+def _walk_mission() -> Mission:
+    return Mission((MissionSegment(WALK, ((2.5, 0.7, 0.0), (2.5, 2.5, 0.0), (2.5, 4.0, 0.0))),))
+
+
+def _finite(p) -> bool:
+    return all(math.isfinite(c) for c in p)
+
+
+# --- 1. invalid values ---------------------------------------------------------------------------
+
+
+def test_nan_position_is_dropped_the_pose_goes_stale_and_the_walk_stops() -> None:
+    """Fault 1: LOCAL_POSITION_NED x = y = NaN mid-walk. The NaN never becomes the pose, the health
+    says why, the manager treats the stale pose as link loss and the robot is stopped."""
+    with vehicle(config(ground=replace_ground(0.5)), walk_speed=0.5) as (link, emu):
+        manager = MissionManager(link, failsafe_after=1.0, failsafe_hold=0.4)
+        manager.start(_walk_mission())
+        assert eventually(lambda: link.latest_state().position[1] > ORIGIN[1] + 0.3, 10.0)
+        emu.corrupt = {"x": NAN, "y": NAN}
+        assert manager.wait(10.0, until=[MissionStatus.FAILSAFE]) is MissionStatus.FAILSAFE, events(manager)
+        st = link.latest_state()
+        assert not st.link_ok and not st.position_valid and _finite(st.position)
+        assert st.health.startswith("stale: no valid position for") and "LOCAL_POSITION_NED.x: not finite" in st.health
+        assert link.stats["invalid"] > 5
+        assert eventually(lambda: any("robot is on the ground; the mission is kept" in m for m in events(manager)))
+        assert any(m.startswith("FAILSAFE: robot not heard for") and "stale" in m for m in events(manager))
+        assert all(_finite(t[:3]) for t in emu.record.targets)  # nothing computed from the NaN was sent
+        assert eventually(lambda: math.hypot(*emu.vel[:2]) < 1e-6, 3.0)  # stopped by the hold (zero velocity)
+        stopped_at = list(emu.pos)
+        emu.corrupt = {}
+        assert eventually(lambda: link.latest_state().health == "ok")
+        assert link.latest_state().position[1] == pytest.approx(ORIGIN[1] + stopped_at[0], abs=0.02)
+        manager.resume()
+        assert manager.wait(20.0) is MissionStatus.DONE, events(manager)
+        assert eventually(lambda: link.latest_state().position == pytest.approx((2.5, 4.0, 0.0), abs=0.05))
+        assert any("link restored after the failsafe: the robot is idle, autopilot mode GUIDED, on the ground at"
+                   in m for m in events(manager)), events(manager)
+
+
+def replace_ground(speed: float):
+    from console.link.mavlink import GroundMotion
+
+    return GroundMotion(speed=speed)
+
+
+@pytest.mark.parametrize("fault, field", [({"z": INF}, "LOCAL_POSITION_NED.z: not finite"),
+                                          ({"vx": NAN}, "LOCAL_POSITION_NED.vx: not finite"),
+                                          ({"y": 1e7}, "LOCAL_POSITION_NED.y: implausible"),
+                                          ({"yaw": NAN}, "ATTITUDE.yaw: not finite")])
+def test_other_non_finite_or_implausible_fields_are_dropped_and_named(fault, field) -> None:
+    with vehicle(start_ned=(1.0, 2.0, 0.0)) as (link, emu):
+        with emu.lock:
+            emu.yaw = 0.5
+        assert eventually(lambda: link.latest_state().yaw == pytest.approx(math.pi / 2 - 0.5, abs=1e-4))
+        emu.corrupt = fault
+        assert eventually(lambda: field in link.latest_state().health), link.latest_state().health
+        st = link.latest_state()
+        assert _finite(st.position) and _finite(st.velocity) and math.isfinite(st.yaw)
+        assert st.position == pytest.approx((ORIGIN[0] + 2.0, ORIGIN[1] + 1.0, 0.0), abs=1e-4)
+        assert st.yaw == pytest.approx(math.pi / 2 - 0.5, abs=1e-4)
+        assert link.stats["invalid"] > 0
+        if "ATTITUDE" in field:  # the position stream is fine: the pose stays valid and the link ok
+            assert st.position_valid and st.link_ok and st.health.startswith("invalid telemetry dropped")
+        else:
+            assert eventually(lambda: not link.latest_state().position_valid and not link.latest_state().link_ok)
+        emu.corrupt = {}
+        assert eventually(lambda: link.latest_state().health == "ok", 4.0)
+
+
+def test_before_the_first_position_the_pose_is_unknown_not_the_origin() -> None:
+    """Fault 10 (display part): before the EKF has a position the state says so."""
+    with vehicle(faults={"ekf_ready": False}, wait_ok=False) as (link, emu):
+        assert eventually(lambda: link.latest_state() is not None and "PreArm" in link.latest_state().readiness)
+        st = link.latest_state()
+        assert not st.position_valid and st.link_ok and not st.ready and _finite(st.position)
+        assert st.health == "position unknown: no LOCAL_POSITION_NED yet (no position estimate?)"
+        assert "no position estimate yet" in st.readiness and "EKF has no horizontal position" in st.readiness
+        assert "pre-arm checks failing (PreArm: Need Position Estimate)" in st.readiness
+        with pytest.raises(Exception, match="position is not known|no camera"):
+            link.capture()
+
+
+# --- 2. staleness and reboots --------------------------------------------------------------------
+
+
+def test_telemetry_stopping_without_a_heartbeat_gap_is_link_loss() -> None:
+    """Fault 2, neighbour: the streams stop, heartbeats go on. Health 'stale', failsafe: hold, then
+    land where the robot is (no flight anywhere)."""
+    with vehicle() as (link, emu):
+        assert link.run_segment(MissionSegment(TAKEOFF, ((2.5, 0.7, 0.0), (2.5, 0.7, 1.5)))).wait(10) is RunStatus.DONE
+        manager = MissionManager(link, failsafe_after=1.0, failsafe_hold=0.5)
+        manager.start(Mission((MissionSegment(FLY, ((2.5, 0.7, 1.5), (2.5, 9.0, 1.5))),),
+                              bounds_max=(10.0, 10.0, 3.0)))
+        assert eventually(lambda: link.latest_state().position[1] > 2.0, 10.0)
+        emu.telemetry_enabled = False
+        assert eventually(lambda: link.latest_state().health.startswith("stale"), 3.0)
+        assert link.latest_state().link_age < 1.0  # heartbeats still arrive
+        assert manager.wait(10.0, until=[MissionStatus.FAILSAFE]) is MissionStatus.FAILSAFE
+        assert eventually(lambda: emu.mode == "LAND", 10.0), events(manager)
+        i = emu.record.modes.index("BRAKE", 1)
+        assert emu.record.modes[i:] == ["BRAKE", "LAND"]  # hold, then land: never back to GUIDED
+        assert eventually(lambda: emu.landed_state == mav.MAV_LANDED_STATE_ON_GROUND, 10.0)
+        emu.telemetry_enabled = True
+        assert eventually(lambda: any("link restored after the failsafe" in m and "on the ground" in m
+                                      for m in events(manager)), 10.0), events(manager)
+        assert manager.progress().status is MissionStatus.FAILSAFE
+
+
+@pytest.mark.parametrize("silence", [0.4, 1.6])  # shorter than the heartbeat time-out, and longer
+def test_a_reboot_is_detected_streams_come_back_and_the_origin_change_is_warned(silence) -> None:
+    """Fault 2: the vehicle reboots mid-walk, forgets the stream rates and sets a new EKF origin
+    where it stands. The link asks for the streams again, re-reads the origin and warns; the
+    mission pauses with the reason."""
+    with vehicle(config(ground=replace_ground(0.5)), walk_speed=0.5, reboot_silence=silence,
+                 faults={"streams_need_request": True}) as (link, emu):
+        manager = MissionManager(link, failsafe_after=3.0, failsafe_hold=0.5)
+        manager.start(_walk_mission())
+        assert eventually(lambda: link.latest_state().position[1] > ORIGIN[1] + 0.8, 10.0)
+        requests = len(emu.record.intervals)
+        moved = math.hypot(emu.pos[0], emu.pos[1])
+        emu.reboot()
+        assert manager.wait(10.0, until=[MissionStatus.PAUSED]) is MissionStatus.PAUSED, events(manager)
+        assert eventually(lambda: link.latest_state().health == "ok", 5.0)  # streams requested again
+        assert len(emu.record.intervals) > requests
+        st = link.latest_state()
+        assert st.link_epoch >= 1
+        assert eventually(lambda: any("EKF origin moved" in w for w in link.latest_state().warnings), 5.0)
+        warning = next(w for w in link.latest_state().warnings if "EKF origin moved" in w)
+        assert f"moved {moved:.1f} m" in warning
+        message = manager.progress().message
+        assert "reconnected or rebooted" in message or "link restored" in message, events(manager)
+        # the twin now shows the new-origin pose: at the NED origin again, and the operator was told
+        assert link.latest_state().position[:2] == pytest.approx(ORIGIN[:2], abs=0.05)
+
+
+# --- 3. stream requests --------------------------------------------------------------------------
+
+
+def test_refused_set_message_interval_falls_back_to_request_data_stream_and_retries() -> None:
+    """Fault 3: SET_MESSAGE_INTERVAL answered UNSUPPORTED, streams only by REQUEST_DATA_STREAM."""
+    with vehicle(faults={"message_interval_supported": False, "streams_need_request": True}) as (link, emu):
+        st = link.latest_state()
+        assert st.health == "ok" and st.position_valid
+        assert emu.record.data_streams and not emu.record.intervals
+        assert link.streams.method == "data_stream"
+        assert any("refused MAV_CMD_SET_MESSAGE_INTERVAL (MAV_RESULT_UNSUPPORTED)" in w for w in st.warnings)
+        asked = len(emu.record.data_streams)
+        emu.streaming = set()  # the vehicle stops streaming (forgot the rates): asked again
+        assert eventually(lambda: link.latest_state().health.startswith("stale"), 3.0)
+        assert eventually(lambda: link.latest_state().health == "ok", 5.0)
+        assert len(emu.record.data_streams) > asked
+
+
+# --- 4 / 5. identity -----------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("component, mav_type, autopilot", [
+    (154, mav.MAV_TYPE_GIMBAL, mav.MAV_AUTOPILOT_GENERIC),  # fault 4
+    (100, mav.MAV_TYPE_CAMERA, mav.MAV_AUTOPILOT_INVALID),  # neighbour: a camera
+    (100, mav.MAV_TYPE_CAMERA, mav.MAV_AUTOPILOT_GENERIC),
+])
+def test_the_autopilot_is_chosen_not_a_component_that_heartbeats_first(component, mav_type, autopilot) -> None:
+    with vehicle(faults={"components": [(component, mav_type, autopilot)], "autopilot_heartbeat_delay": 0.6}) \
+            as (link, emu):
+        assert "component 1)" in link.description
+        assert any(c.startswith(f"1/{component} ") for c in link.components())
+        with emu.lock:
+            emu.yaw = 0.2  # the component sends ATTITUDE yaw 1.0: not the robot's
+        assert eventually(lambda: link.latest_state().yaw == pytest.approx(math.pi / 2 - 0.2, abs=1e-4))
+        time.sleep(0.3)
+        assert link.latest_state().yaw == pytest.approx(math.pi / 2 - 0.2, abs=1e-4)
+        assert link.latest_state().autopilot_mode == "STABILIZE"
+        run = link.run_segment(MissionSegment(TAKEOFF, ((2.5, 0.7, 0.0), (2.5, 0.7, 1.0))))
+        assert run.wait(10.0) is RunStatus.DONE, run.error
+        assert emu.record.to_others == []  # every command went to the autopilot
+
+
+def test_a_vehicle_with_the_consoles_system_id_is_warned_about() -> None:
+    with vehicle(system=255) as (link, emu):
+        st = link.latest_state()
+        assert any("system id 255, the console's own" in w for w in st.warnings)
+        assert any("WARNING: link: the vehicle uses system id 255" in t for _, t in st.messages)
+
+
+def test_a_second_vehicle_is_warned_about_and_ignored() -> None:
+    with vehicle(faults={"other_systems": [2]}) as (link, emu):
+        assert eventually(lambda: any("second vehicle (system 2" in w for w in link.latest_state().warnings))
+        time.sleep(0.3)
+        assert link.latest_state().position == pytest.approx((ORIGIN[0], ORIGIN[1], 0.0), abs=1e-4)
+        assert "system 1 " in link.description
+
+
+# --- 10. readiness -------------------------------------------------------------------------------
+
+
+def test_takeoff_waits_for_the_position_estimate_instead_of_failing() -> None:
+    """Fault 10: Execute before the EKF has a position: the mission waits, then takes off."""
+    with vehicle(faults={"ekf_ready": False}, wait_ok=False) as (link, emu):
+        assert eventually(lambda: link.latest_state() is not None)
+        manager = MissionManager(link, failsafe_after=1.5, failsafe_hold=0.5)
+        manager.start(Mission((MissionSegment(TAKEOFF, ((2.5, 0.7, 0.0), (2.5, 0.7, 1.5))),
+                               MissionSegment(LAND, ((2.5, 0.7, 1.5), (2.5, 0.7, 0.0))))))
+        assert eventually(lambda: any("waiting for the robot's position" in m for m in events(manager)))
+        time.sleep(0.5)
+        assert manager.progress().status is MissionStatus.RUNNING
+        assert not any(c == mav.MAV_CMD_COMPONENT_ARM_DISARM for c, _ in emu.record.received)  # no doomed arming
+        emu.ekf_ready = True
+        assert manager.wait(20.0) is MissionStatus.DONE, events(manager)
+        assert emu.record.takeoff_altitudes == [pytest.approx(1.5)]
+
+
+def test_a_vehicle_that_never_gets_ready_pauses_the_mission_with_its_reasons() -> None:
+    with vehicle(faults={"ekf_ready": False}, wait_ok=False) as (link, emu):
+        assert eventually(lambda: link.latest_state() is not None and link.latest_state().readiness)
+        manager = MissionManager(link, failsafe_after=1.5, failsafe_hold=0.5, ready_timeout=1.0)
+        manager.start(Mission((MissionSegment(TAKEOFF, ((2.5, 0.7, 0.0), (2.5, 0.7, 1.5))),)))
+        assert manager.wait(10.0) is MissionStatus.PAUSED
+        message = manager.progress().message
+        assert "no valid robot position after 1 s" in message and "PreArm: Need Position Estimate" in message, message
+
+
+# --- the telemetry log ---------------------------------------------------------------------------
+
+
+def test_the_session_is_recorded_as_a_tlog_that_pymavlink_reads_back(tmp_path) -> None:
+    with vehicle(tlog=tmp_path) as (link, emu):
+        link.set_mode("GUIDED")
+        path = link.tlog
+        assert eventually(lambda: emu.mode == "GUIDED")
+        assert eventually(lambda: link.stats["received"] > 40)  # about a second of telemetry
+    assert path is not None and path.parent == tmp_path and path.suffix == ".tlog"
+    log = mavutil.mavlink_connection(str(path))
+    seen: dict[tuple[str, int], int] = {}
+    stamps = []
+    while True:
+        m = log.recv_match()
+        if m is None:
+            break
+        seen[(m.get_type(), m.get_srcSystem())] = seen.get((m.get_type(), m.get_srcSystem()), 0) + 1
+        stamps.append(m._timestamp)
+    assert seen.get(("HEARTBEAT", 1), 0) >= 2 and seen.get(("LOCAL_POSITION_NED", 1), 0) > 10
+    assert seen.get(("HEARTBEAT", 255), 0) >= 1  # what the console sent is in it too
+    assert seen.get(("COMMAND_LONG", 255), 0) >= 1 and seen.get(("COMMAND_ACK", 1), 0) >= 1
+    assert all(abs(t - time.time()) < 60 for t in stamps)  # wall-clock timestamps of this session
