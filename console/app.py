@@ -32,6 +32,7 @@ from .mapping_job import MappingJob, Perceiver
 from .mission_view import MissionRunner, MissionView
 from .objects_view import ObjectsView
 from .paths_view import PathsView
+from .scene_summary_view import SceneSummaryView
 from .client_notice import page_style, tell
 from .robot_view import RobotView, is_alert
 from .scene_watch import FrameError, NotReady, SceneWatcher, objects_to_world
@@ -307,6 +308,9 @@ class ConsoleApp:
                 layers=self.views["grid"].layers_folder)
         with gui.add_folder("Plan"):
             paths_holder["p"] = self.views["paths"] = PathsView(server, session)
+        with gui.add_folder("Scene summary"):
+            self.views["summary"] = SceneSummaryView(server, session)
+            self._closers.append(self.views["summary"].close)
         with gui.add_folder("Session", expand_by_default=bool(session.status_text()[1])):
             self._session_controls()
         camera = gui.add_panel()

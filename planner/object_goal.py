@@ -6,7 +6,8 @@ whose centre is nearest to the object's footprint (its oriented box seen from ab
 :data:`APPROACH_MAX` away, with a clear straight line to the footprint's nearest point in at
 least one layer the object spans (no other object's cell in between: the robot reaches over
 nothing, e.g. not across a wall around the object, but it may stand beside a table to reach the
-box on it). Ties go to the cell nearest the start, then to the lowest cell index,
+box on it), and at least the robot's radius (the grid's ``margin``) from every object's
+footprint when the scene's objects are given (the console refuses goals closer than that). Ties go to the cell nearest the start, then to the lowest cell index,
 so the choice is deterministic.
 
 Reachability from a start point, with the Aerial-Ground A*'s own rules:
@@ -139,10 +140,14 @@ class Reachability:
         grid: The planning grid (world frame).
         start: Where the robot is (world [m]); on the floor or in the air.
         route: A route on ``grid`` whose cost weights and A* are used (default: a new one).
+        objects: The scene's objects: an approach point keeps the robot's radius (the grid's
+            ``margin``) from every one of their footprints, as the console demands of a goal.
     """
 
-    def __init__(self, grid: PlanningGrid, start: Sequence[float], route: Route | None = None) -> None:
+    def __init__(self, grid: PlanningGrid, start: Sequence[float], route: Route | None = None,
+                 objects: Sequence[SceneObject] = ()) -> None:
         self.grid = grid
+        self.objects = tuple(objects)
         self.route = route if route is not None else Route(grid, start)
         self.start: Vec3 = (float(start[0]), float(start[1]), float(start[2]))
         cost = self.route.cost_array
@@ -185,7 +190,7 @@ class Reachability:
             idx, pts, gap = idx[near], pts[near], gap[near]
             to_start = np.hypot(pts[:, 0] - self.start[0], pts[:, 1] - self.start[1])
             order = np.lexsort((idx[:, 1], idx[:, 0], np.round(to_start, 6), np.round(gap, 6)))
-            best = next((int(b) for b in order if self._in_reach(obj, pts[b])), None)
+            best = next((int(b) for b in order if self._clear(pts[b]) and self._in_reach(obj, pts[b])), None)
             if best is None:
                 continue
             goal = (float(pts[best, 0]), float(pts[best, 1]), float(ws.floor))
@@ -198,6 +203,11 @@ class Reachability:
             reason = (f"no floor within {APPROACH_MAX:.1f} m of it can be reached by walking or by flying "
                       "(closed in by obstacles)")
         return Approach(obj.id, "none", reason=reason)
+
+    def _clear(self, xy: np.ndarray) -> bool:
+        """Whether ``xy`` (world [m]) keeps the robot's radius from every object's footprint."""
+        m = self.grid.margin
+        return all(float(footprint_distance(o, xy[None, :])[0]) >= m for o in self.objects)
 
     def _in_reach(self, obj: SceneObject, xy: np.ndarray) -> bool:
         """Whether the straight line from ``xy`` (world [m]) to the nearest point of ``obj``'s
@@ -252,7 +262,7 @@ def goal_beside(scene: Scene, grid: PlanningGrid, name: str, start: Sequence[flo
     message says why).
     """
     obj = find_object(scene, name, near=start)
-    app = Reachability(grid, start, route).approach(obj)
+    app = Reachability(grid, start, route, scene.objects).approach(obj)
     if app.goal is None:
         raise ObjectGoalError(f"{obj.label} {obj.id!r} cannot be reached: {app.reason}")
     return obj, app

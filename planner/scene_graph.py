@@ -390,7 +390,7 @@ def build_scene_graph(scene: Scene, robot: Sequence[float] | None = None, grid: 
         add(x, "next_to", y)
     records: list[dict[str, Any]] = []
     view = _View(objs, pose) if pose is not None else None
-    reach = Reachability(grid, pose[:3], route) if (pose is not None and grid is not None) else None
+    reach = Reachability(grid, pose[:3], route, objs) if (pose is not None and grid is not None) else None
     if view is not None:
         for a in range(n):
             for b in range(n):
