@@ -129,13 +129,16 @@ def test_goals_go_through_objects_typed_goals_top_view_and_the_disconnected_bann
             assert goal[2] == 0.0 and math.dist(goal[:2], target[:2]) < 0.3, (goal, target)
             assert session.selected is None, f"{session.selected.id} was selected instead"
             assert wait_until(lambda: "drops" not in app.views["paths"].drawn(), 10)  # a floor goal needs no drop line
-            # its notice sits at the bottom right of the 3D view, clear of its centre and upper left
-            note = page.locator(".mantine-Notification-root", has_text="Candidate path").first
+            # notices sit at the bottom right of the 3D view, clear of its centre and upper left (an
+            # error-like notice that stays, so the check does not race an auto-close)
+            handle = client.add_notification("Layout check", "stays until closed", color="red", auto_close_seconds=None)
+            note = page.locator(".mantine-Notification-root", has_text="Layout check").first
             note.wait_for(timeout=30_000)
             nb, canvas = note.bounding_box(), page.locator("canvas").first.bounding_box()
             assert nb is not None and canvas is not None
             assert nb["x"] > canvas["x"] + canvas["width"] / 2 and nb["y"] > canvas["y"] + canvas["height"] / 2, (nb, canvas)
             assert nb["x"] + nb["width"] <= canvas["x"] + canvas["width"] + 1, (nb, canvas)
+            handle.remove()
 
             # --- altitude mode: a click on an object gives a goal in the air in front of it --------------
             session.set_goal_mode("altitude", 1.5)
