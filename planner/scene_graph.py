@@ -34,7 +34,9 @@ Deterministic rules and their thresholds (all module constants):
 - **Reachability** (with a robot pose and a grid): walk, fly or none, by
   :class:`planner.object_goal.Reachability` (the Aerial-Ground A*'s own connectivity and costs).
 - **Uncertainties**: detector score below :data:`LOW_SCORE`, a size not from the catalog, a
-  position from the depth map only, an object that seems to float.
+  position from the depth map only, an object that seems to float, a fused horizontal position
+  error of :data:`SIGMA_WARN` or more (:func:`position_sigma`; not for pinned objects), and the
+  map fusion's corrections (the object's ``flags``).
 """
 
 from __future__ import annotations
@@ -66,6 +68,7 @@ GROUP_MIN = 3
 LINE_WIDTH = 0.30  # [m]
 WALL_GAP = 0.50  # [m]
 LOW_SCORE = 0.50
+SIGMA_WARN = 0.25  # [m] horizontal 1-sigma position error worth stating
 COLUMN_TOL = 0.25  # [m]: members whose centres are this close horizontally form one column
 SECTORS = ("ahead", "ahead-left", "left", "behind-left", "behind", "behind-right", "right", "ahead-right")
 
@@ -148,6 +151,16 @@ def _overlap_area(a: SceneObject, b: SceneObject, samples: int = 9) -> float:
     uu, vv = np.meshgrid(u * l, u * w, indexing="ij")
     xy = np.stack([a.position[0] + c * uu - s * vv, a.position[1] + s * uu + c * vv], axis=-1).reshape(-1, 2)
     return float(np.mean(footprint_distance(b, xy) <= 1e-9))
+
+
+def position_sigma(o: SceneObject) -> float | None:
+    """Horizontal 1-sigma position error [m] of a mapped object: the inverse-variance fusion of
+    its used sightings' larger horizontal sigma (ray directions ignored); ``None`` without history."""
+    used = [h for h in getattr(o, "history", ()) if h.used]
+    if not used:
+        return None
+    info = sum(1.0 / max(h.sigma[0], h.sigma[1]) ** 2 for h in used)
+    return math.sqrt(1.0 / info)
 
 
 def _bottom(o: SceneObject) -> float:
@@ -441,6 +454,10 @@ def build_scene_graph(scene: Scene, robot: Sequence[float] | None = None, grid: 
             u.append("position from the depth map only")
         if support[a][0] is None:
             u.append(f"seems to float {support[a][1]:.2f} m above the floor with nothing under it")
+        sigma = position_sigma(o)
+        if sigma is not None and sigma >= SIGMA_WARN and not getattr(o, "is_pinned", False):
+            u.append(f"position uncertain by about {sigma:.2f} m (1 sigma)")
+        u += [f"map fusion: {f}" for f in getattr(o, "flags", ())]
         uncertain += [f"{o.id}: {t}" for t in u]
         records.append(rec)
     if pose is None:

@@ -278,3 +278,27 @@ def test_robot_inside_an_obstacle_gives_unknown_reachability() -> None:
     assert r.approach(objs[-1]).mode == "unknown"
     g = build_scene_graph(Scene(objects=tuple(objs)), (2.5, 3.0, 0.0, 0.0), grid)
     assert any("reachability unknown" in u for u in g["uncertainties"])
+
+
+def test_map_uncertainties_are_stated() -> None:
+    from dataclasses import replace
+
+    from pipeline.scene import Sighting, Source
+
+    def seen(sig: float) -> Sighting:
+        return Sighting("c1", (1.0, 2.0, 0.5), 0.0, (0.6, 1.0, 0.6), (sig, sig / 2, 0.1))
+
+    base = _obj("chair", "office_chair", 1.0, 2.0, (0.6, 1.0, 0.6), score=0.3, size_known=False,
+                source=Source("c1", "depth"))
+    vague = replace(base, history=(seen(0.6), seen(0.6)), flags=("set on the floor: was 0.30 m up",))
+    sure = replace(base, id="chair-2", position=(3.5, 2.0, 0.5), history=(seen(0.1),))
+    g = _graph([vague, sure])
+    u = _o(g, "chair")["uncertain"]
+    assert "low detector score 0.30" in u and "size estimated, not from the catalog" in u
+    assert "position from the depth map only" in u
+    assert "position uncertain by about 0.42 m (1 sigma)" in u  # two sightings of 0.6 m: 0.6 / sqrt(2)
+    assert "map fusion: set on the floor: was 0.30 m up" in u
+    assert not any("position uncertain" in t for t in _o(g, "chair-2")["uncertain"])
+    pinned = _graph([replace(vague, pinned=True)])
+    assert not any("position uncertain" in t for t in _o(pinned, "chair")["uncertain"])
+    assert "Uncertain:" in summarize(g) and "chair: low detector score 0.30" in summarize(g)
