@@ -45,7 +45,7 @@ from scipy.spatial.transform import Rotation
 from pipeline.catalog import Catalog
 from pipeline.geometry import OPTICAL_TO_BODY, CameraError, CameraMount, Intrinsics, Pose
 from pipeline.ground_truth import GroundTruthBundle, GroundTruthDetector
-from pipeline.image_io import load_image
+from pipeline.image_io import read_image
 from pipeline.mapper import Mapper, MapperConfig, MapResult
 from pipeline.models.nms import box_iou
 from pipeline.scene import write_text_atomic
@@ -268,7 +268,10 @@ def run_bench(
     model_names: dict[str, str] = {}
     try:
         for sample in tqdm(samples, desc="bench", unit="img", disable=not progress):
-            image = load_image(sample.image_path)
+            loaded = read_image(sample.image_path)  # upright: EXIF orientation applied, said when present
+            if loaded.note:
+                tqdm.write(loaded.note)
+            image = loaded.image
             mapper = shared_mapper
             if gt_boxes:
                 known = [o for o in sample.objects if o.cls is not None]

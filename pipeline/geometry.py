@@ -192,6 +192,22 @@ class CameraMount:
         return Pose.from_rotation(tilt * OPTICAL_TO_BODY, self.position)
 
 
+def mount_from_gravity_height(gravity_cam: Sequence[float], camera_height: float,
+                              base: CameraMount | None = None) -> CameraMount:
+    """The mount of a camera that sees gravity as ``gravity_cam`` (unit down vector, camera frame)
+    from ``camera_height`` [m] above the floor, for a robot standing level on the floor.
+
+    Pitch (down positive) and roll come from the gravity vector; the yaw (unobservable from gravity)
+    and the forward/left offsets are those of ``base`` (default: the default mount's), the height
+    is ``camera_height``.
+    """
+    gx, gy, gz = (float(v) for v in gravity_cam)
+    pitch = math.atan2(gz, math.hypot(gx, gy))
+    roll = math.atan2(gx, gy)
+    b = base or CameraMount()
+    return CameraMount((b.position[0], b.position[1], float(camera_height)), pitch, b.yaw, roll)
+
+
 def camera_pose_in_world(robot_pose: Pose, mount: CameraMount) -> Pose:
     """``world <- camera`` for a robot at ``robot_pose`` (``world <- robot``)."""
     return robot_pose @ mount.pose

@@ -12,8 +12,8 @@ import numpy as np
 import pytest
 from PIL import Image
 
-from console.link.captures import CapturesError, CapturesFolder, mount_from_gravity
-from pipeline.geometry import CameraMount
+from console.link.captures import CapturesError, CapturesFolder
+from pipeline.geometry import CameraMount, mount_from_gravity_height
 
 
 def _photo(folder: Path, stem: str, w: int, h: int, meta: dict | None = None, *, orientation: int | None = None,
@@ -115,7 +115,7 @@ def test_per_photo_gravity_and_height_give_the_cameras_mount(tmp_path: Path) -> 
     assert photo.mount.pitch == pytest.approx(pitch) and photo.mount.roll == pytest.approx(roll)
     back = photo.mount.pose.rotation.inv().apply([0.0, 0.0, -1.0])
     assert np.allclose(back, g, atol=1e-9)
-    level = mount_from_gravity((0.0, 1.0, 0.0), 0.35)
+    level = mount_from_gravity_height((0.0, 1.0, 0.0), 0.35)
     assert level.pitch == pytest.approx(0.0) and level.roll == pytest.approx(0.0)
 
 

@@ -201,3 +201,15 @@ def test_parse_pose_errors_name_the_option(text: str, match: str) -> None:
 def test_parse_pose_takes_negative_numbers() -> None:
     p = parse_pose("-1,2,0,-90")
     assert np.allclose(p.translation, [-1, 2, 0]) and p.yaw == pytest.approx(-math.pi / 2)
+
+
+def test_mount_from_gravity_and_height_puts_gravity_where_given() -> None:
+    from pipeline.geometry import mount_from_gravity_height
+
+    rng = np.random.default_rng(4)
+    for _ in range(20):
+        g = rng.normal(size=3) * 0.4 + [0.0, 1.0, 0.3]
+        g /= np.linalg.norm(g)
+        mount = mount_from_gravity_height(g, 1.3)
+        seen = mount.pose.rotation.inv().apply([0.0, 0.0, -1.0])
+        assert np.allclose(seen, g, atol=1e-9) and mount.position[2] == 1.3 and mount.yaw == 0.0

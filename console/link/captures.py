@@ -35,7 +35,7 @@ from typing import Any
 
 import numpy as np
 
-from pipeline.geometry import CameraError, CameraMount, Intrinsics
+from pipeline.geometry import CameraError, CameraMount, Intrinsics, mount_from_gravity_height
 from pipeline.image_io import ImageError, read_image, upright_size
 from pipeline.scene import SceneObject, Source
 
@@ -84,21 +84,6 @@ def read_json(path: Path) -> Any:
         raise CapturesError(f"{path}: not readable JSON: {exc}") from None
 
 
-def mount_from_gravity(gravity_cam: tuple[float, ...], camera_height: float,
-                       base: CameraMount | None = None) -> CameraMount:
-    """The camera mount that sees gravity as ``gravity_cam`` (unit down vector, OpenCV camera frame)
-    from ``camera_height`` [m] above the floor, for a robot standing level on the floor.
-
-    Pitch (down positive) and roll come from the gravity vector; the yaw and the forward/left
-    offsets are those of ``base`` (the robot's own mount), the height is ``camera_height``.
-    """
-    gx, gy, gz = gravity_cam
-    pitch = math.atan2(gz, math.hypot(gx, gy))
-    roll = math.atan2(gx, gy)
-    b = base or CameraMount()
-    return CameraMount((b.position[0], b.position[1], float(camera_height)), pitch, b.yaw, roll)
-
-
 def _photo_mount(meta: dict[str, Any], where: Path) -> CameraMount | None:
     g, h = meta.get("gravity_cam"), meta.get("camera_height")
     if g is None and h is None:
@@ -112,7 +97,7 @@ def _photo_mount(meta: dict[str, Any], where: Path) -> CameraMount | None:
         raise CapturesError(f"{where}: gravity_cam must be a unit vector (camera frame), got length {n:.3g}")
     if isinstance(h, bool) or not isinstance(h, (int, float)) or not math.isfinite(h) or not 0.0 < h <= 10.0:
         raise CapturesError(f"{where}: camera_height must be a number within 0..10 m, got {h!r}")
-    return mount_from_gravity(tuple(v / n for v in gv), float(h))
+    return mount_from_gravity_height(tuple(v / n for v in gv), float(h))
 
 
 def _intrinsics(meta: dict[str, Any], where: Path, size: tuple[int, int]) -> Intrinsics:
