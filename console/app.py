@@ -316,6 +316,12 @@ class ConsoleApp:
         camera = gui.add_panel()
         with camera.add_tab("Camera", viser.Icon.CAMERA):
             self.views["capture"] = CaptureView(server, session, colors=self.views["objects"].colors)
+            from .camera_preview import live_preview
+
+            preview = live_preview(server, self.link)  # a live camera's low-rate preview (--camera), or None
+            if preview is not None:
+                self.views["camera_preview"] = preview
+                self._closers.append(preview.close)
         camera.dock_left()
         camera.set_width(330)
         server.gui.main_panel.dock_right()
