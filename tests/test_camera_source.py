@@ -155,3 +155,23 @@ def test_the_simulated_robot_serves_the_live_camera_with_its_mount(tmp_path: Pat
     # the camera sits 0.8 m above the robot's floor point, as its camera file says
     assert shot.camera_pose.translation[2] == pytest.approx(shot.robot_pose.translation[2] + 0.8)
     assert image.shape == (H, W, 3) and intr == CAMERA.intrinsics
+
+
+def test_the_camera_panel_preview_follows_the_live_camera(tmp_path: Path) -> None:
+    from types import SimpleNamespace
+
+    from console.camera_preview import LivePreview, live_source
+    from console.link.sim import SimRobot
+
+    image, status = SimpleNamespace(image=None), SimpleNamespace(content="")
+    with CameraSource(str(_video(tmp_path / "walk.avi")), CAMERA, preview_interval=0.1) as cam:
+        assert live_source(SimRobot(captures=cam, manual_clock=True)) is cam
+        assert live_source(SimRobot(manual_clock=True)) is None  # rendered camera: no live preview
+        preview = LivePreview(cam, image, status, interval=0.05)
+        try:
+            assert wait_for(lambda: image.image is not None and "live, last frame" in status.content), status.content
+            assert image.image.shape[1] <= 320 and image.image.shape[2] == 3
+            first = image.image
+            assert wait_for(lambda: image.image is not first)  # it keeps following the stream
+        finally:
+            preview.close()

@@ -130,3 +130,28 @@ def test_live_camera_options(tmp_path: Path, capsys: pytest.CaptureFixture[str])
     ):
         assert main(["console", *argv, "--session", str(tmp_path / "s")]) == 2
         assert message in capsys.readouterr().err
+
+
+def test_the_console_shows_the_live_camera_preview(tmp_path: Path) -> None:
+    import cv2
+    import numpy as np
+
+    from console.app import ConsoleConfig, wait_until
+    from console.link.camera_source import CameraSource
+    from pipeline.geometry import CameraConfig, Intrinsics
+
+    video = tmp_path / "v.avi"
+    writer = cv2.VideoWriter(str(video), cv2.VideoWriter_fourcc(*"MJPG"), 20.0, (160, 120))
+    for i in range(20):
+        writer.write(np.full((120, 160, 3), 10 * i, np.uint8))
+    writer.release()
+    source = CameraSource(str(video), CameraConfig(Intrinsics(150.0, 150.0, 80.0, 60.0, 160, 120))).start()
+    app = ConsoleApp(ConsoleConfig(session_dir=tmp_path / "s", port=0, fresh=True, captures=source)).start()  # type: ignore[arg-type]
+    try:
+        preview = app.views["camera_preview"]
+        assert wait_until(lambda: "live, last frame" in preview._status.content, 30), preview._status.content
+        assert wait_until(lambda: app.session is not None and app.link.connected, 30)
+        assert app.link.capture().image.shape == (120, 160, 3)
+    finally:
+        app.stop()
+        source.close()
