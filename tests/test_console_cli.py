@@ -155,3 +155,19 @@ def test_the_console_shows_the_live_camera_preview(tmp_path: Path) -> None:
     finally:
         app.stop()
         source.close()
+
+
+def test_a_captures_folder_with_a_resized_photo_stops_the_console_at_start(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    import json
+
+    import cv2
+    import numpy as np
+
+    photos = tmp_path / "photos"
+    photos.mkdir()
+    cv2.imwrite(str(photos / "small.jpg"), np.full((318, 438, 3), 100, np.uint8))  # 60 % of 730 x 530
+    (photos / "small.json").write_text(json.dumps({"K": [[584.0, 0, 365.0], [0, 584.0, 265.0], [0, 0, 1]]}))
+    code = main(["console", "--captures", str(photos), "--session", str(tmp_path / "s"), "--port", "0"])
+    err = capsys.readouterr().err
+    assert code == 2 and "small.json: 'width' is required" in err and "Traceback" not in err
