@@ -3,12 +3,16 @@
 Everything is in the world frame (z up) [m]. An object is reached by standing on the floor
 beside it: the **approach cell** is the passable ground-layer cell (``k = 0``, finite cost)
 whose centre is nearest to the object's footprint (its oriented box seen from above), at most
-:data:`APPROACH_MAX` away, with a clear straight line to the footprint's nearest point in at
-least one layer the object spans (no other object's cell in between: the robot reaches over
-nothing, e.g. not across a wall around the object, but it may stand beside a table to reach the
-box on it), and at least the robot's radius (the grid's ``margin``) from every object's
-footprint when the scene's objects are given (the console refuses goals closer than that). Ties go to the cell nearest the start, then to the lowest cell index,
-so the choice is deterministic.
+:data:`APPROACH_MAX` away, such that
+
+- the straight line to the footprint's nearest point crosses no other object at the object's
+  height (the robot reaches over nothing: not across a wall around the object, but it may stand
+  beside a table to reach the box on it), and
+- the point keeps the robot's radius (the grid's ``margin``) from every object's footprint (the
+  console refuses goals closer than that).
+
+Ties go to the cell nearest the start, then to the lowest cell index: the choice is
+deterministic. These two checks use the scene's objects (``objects`` argument).
 
 Reachability from a start point, with the Aerial-Ground A*'s own rules:
 
@@ -45,6 +49,12 @@ from .route import Route
 
 APPROACH_MAX = 1.0
 """Farthest an approach cell's centre may be from the object's footprint [m]."""
+
+REACH_TOL = 0.02
+"""Height overlap [m] below which another object does not stand between the robot and an object."""
+
+REACH_STEP = 0.02
+"""Sampling step [m] along the line from an approach point to the object."""
 
 Vec3 = tuple[float, float, float]
 
@@ -177,6 +187,7 @@ class Reachability:
         if self.start_problem:
             return Approach(obj.id, "unknown", reason=self.start_problem)
         ws = self.grid.workspace
+        connected = False  # some connected floor lies within APPROACH_MAX
         for mode, cand in (("walk", self._walk & self._ground_ok), ("fly", self._landable),
                            ("fly", self._all[:, :, 0] & self._ground_ok)):
             if not cand.any():
@@ -187,6 +198,7 @@ class Reachability:
             near = gap <= APPROACH_MAX + 1e-9
             if not near.any():
                 continue
+            connected = True
             idx, pts, gap = idx[near], pts[near], gap[near]
             to_start = np.hypot(pts[:, 0] - self.start[0], pts[:, 1] - self.start[1])
             order = np.lexsort((idx[:, 1], idx[:, 0], np.round(to_start, 6), np.round(gap, 6)))
@@ -199,6 +211,9 @@ class Reachability:
             return self._planned(obj.id, mode, goal, float(gap[best]))
         if not self._all[:, :, 0].any() and not self._walk.any():
             reason = "the robot's position is cut off from the floor"
+        elif connected:
+            reason = (f"no floor spot within {APPROACH_MAX:.1f} m of it keeps the robot's {self.grid.margin:.2f} m "
+                      "radius from every object with nothing in between (too cramped)")
         else:
             reason = (f"no floor within {APPROACH_MAX:.1f} m of it can be reached by walking or by flying "
                       "(closed in by obstacles)")
@@ -211,33 +226,29 @@ class Reachability:
 
     def _in_reach(self, obj: SceneObject, xy: np.ndarray) -> bool:
         """Whether the straight line from ``xy`` (world [m]) to the nearest point of ``obj``'s
-        footprint is clear of other objects' cells in at least one layer the object spans."""
-        ws, grid = self.grid.workspace, self.grid
+        footprint crosses no other object whose height range overlaps ``obj``'s by more than
+        :data:`REACH_TOL` (a table under a box does not count; a wall around it does)."""
         w, _, l = obj.size
         c, s = math.cos(obj.yaw), math.sin(obj.yaw)
         d = xy - np.asarray(obj.position[:2])
         along = float(np.clip(c * d[0] + s * d[1], -l / 2, l / 2))
         across = float(np.clip(-s * d[0] + c * d[1], -w / 2, w / 2))
         target = np.asarray(obj.position[:2]) + along * np.array([c, s]) + across * np.array([-s, c])
-        n = max(2, int(math.ceil(float(np.linalg.norm(target - xy)) / (ws.resolution / 4))) + 1)
+        length = float(np.linalg.norm(target - xy))
+        n = max(2, int(math.ceil(length / REACH_STEP)) + 1)
         line = xy[None, :] + np.linspace(0.0, 1.0, n)[:, None] * (target - xy)[None, :]
-        shape = grid.state.shape
-        ij = np.floor((line - np.asarray(ws.min[:2])) / ws.resolution).astype(np.int64)
-        ij = np.clip(ij, 0, np.array(shape[:2]) - 1)
-        half = ws.resolution / 2
-        xs, ys, zs = ws.axes()
-        dx, dy = xs[ij[:, 0]] - obj.position[0], ys[ij[:, 1]] - obj.position[1]
-        own_xy = ((np.abs(c * dx + s * dy) < l / 2 + half) & (np.abs(-s * dx + c * dy) < w / 2 + half))
-        lo = obj.position[2] - obj.size[1] / 2
-        k0 = int(np.clip(math.floor((lo - ws.floor) / ws.resolution), 0, shape[2] - 1))
-        k1 = int(np.clip(math.floor((lo + obj.size[1] - ws.floor) / ws.resolution - 1e-9), k0, shape[2] - 1))
-        for k in range(k0, k1 + 1):
-            st = grid.state[ij[:, 0], ij[:, 1], k]
-            own = own_xy & (abs(zs[k] - obj.position[2]) < obj.size[1] / 2 + half)  # the cells box_cells gives it
-            other = (st == CellState.OCCUPIED) & ~own
-            if not other.any():
-                return True
-        return False
+        lo, hi = obj.position[2] - obj.size[1] / 2, obj.position[2] + obj.size[1] / 2
+        for other in self.objects:
+            if other.id == obj.id:
+                continue
+            o_lo, o_hi = other.position[2] - other.size[1] / 2, other.position[2] + other.size[1] / 2
+            if min(hi, o_hi) - max(lo, o_lo) <= REACH_TOL:
+                continue
+            if math.dist(other.position[:2], xy) > length + math.hypot(other.size[0], other.size[2]):
+                continue
+            if np.any(footprint_distance(other, line) <= 0.0):
+                return False
+        return True
 
     def _planned(self, oid: str, mode: str, goal: Vec3, gap: float) -> Approach:
         res = self.route.plan(self.start, goal)
