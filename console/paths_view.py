@@ -41,7 +41,7 @@ KIND_RGB: dict[SegmentKind, tuple[int, int, int]] = {
 LIFT = 0.025  # draw floor paths this far above the floor [m], clear of the floor grid
 NODE_CLICK_WINDOW = 0.5  # a scene click this soon after an object click belongs to the object [s]
 CLICK_CHOICES = {"add goal": True, "select object": False}  # the "Click" dropdown -> goal mode on/off
-DROP_RGB = (120, 120, 130)
+DROP_RGB = (60, 60, 72)
 
 
 def polyline_segments(points: np.ndarray, lift: float = 0.0) -> np.ndarray:
@@ -257,7 +257,7 @@ class PathsView:
             g = r.candidate_goal
             floor = self._session.workspace.floor
             drops = drop_lines(list(r.goals) + ([g] if g is not None else []), floor)
-            self._lines("drops", drops, DROP_RGB, 0.015)
+            self._lines("drops", drops, DROP_RGB, 0.022)
             self._put("candidate_goal", None if g is None else lambda: sc.add_icosphere(
                 "/paths/candidate_goal", radius=0.08, color=CANDIDATE_RGB, position=(g[0], g[1], g[2] + LIFT),
                 cast_shadow=False))
