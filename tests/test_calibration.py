@@ -119,3 +119,20 @@ def test_calibrate_command_refusals_write_nothing(chess_views, tmp_path: Path, c
     except SystemExit as exc:
         code = exc.code
     assert code == 2 and message in capsys.readouterr().err and not out.exists()
+
+
+def test_calibrate_command_with_a_charuco_board(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    from console.cli import main
+    from pipeline.geometry import load_camera_toml
+
+    board = Board("charuco", 7, 5, 0.04, 0.03, "DICT_5X5_100")
+    photos = tmp_path / "charuco"
+    photos.mkdir()
+    for name, img in Renderer(board, K, DIST, SIZE).views(7, seed=5, distance=(0.45, 0.6)):
+        cv2.imwrite(str(photos / name.replace(".png", ".jpg")), img[:, :, ::-1], [cv2.IMWRITE_JPEG_QUALITY, 95])
+    out = tmp_path / "camera.toml"
+    code = main(["calibrate", str(photos), "--charuco", "--board", "7x5", "--square", "0.04", "--marker", "0.03",
+                 "--out", str(out)])
+    assert code == 0, capsys.readouterr().err
+    _close(load_camera_toml(out).intrinsics, K)
+    assert 'board = "charuco 7x5"' in out.read_text()

@@ -210,3 +210,11 @@ def test_deeply_nested_json_in_the_watched_folder_is_reported(tmp_path: Path) ->
                            settle=0.0)
     assert watcher.poll() == ["deep.json"]
     assert errors and errors[0][0] == "deep.json" and "nested too deeply" in errors[0][1]
+
+
+def test_bench_refuses_an_out_folder_and_a_zero_limit(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["bench", str(tmp_path), "--out", str(tmp_path)]) == 2
+    assert f"--out {tmp_path} is a directory" in capsys.readouterr().err
+    assert main(["bench", str(tmp_path), "--limit", "0"]) == 2
+    assert "--limit: must be at least 1, got 0" in capsys.readouterr().err
+    assert sorted(tmp_path.iterdir()) == []
