@@ -25,6 +25,7 @@ import viser
 from pipeline.scene import SceneObject
 
 from .client_notice import tell
+from .object_history import history_lines
 from .picking import SELECT_MODIFIER, click_intent
 from .session import CAPTURE, SCENE, SELECTION, Session, SessionError
 from .wording import natural_sorted, plural
@@ -167,6 +168,7 @@ def describe(obj: SceneObject) -> str:
             lines.append(f"| distance, {key} | {'—' if v is None else f'{v:.2f} m'} |")
     if s.bbox is not None:
         lines.append(f"| box in photo | {', '.join(f'{v:.0f}' for v in s.bbox)} px |")
+    lines += history_lines(obj)  # pin, fusion flags, observations (console/object_history.py)
     return "\n".join(lines)
 
 

@@ -76,3 +76,26 @@ def test_capture_job_reports_rejections_and_holds_back_another_room(tmp_path: Pa
     assert job.held is None and len(session.scene.objects) > len(before.objects)
     with pytest.raises(SessionError, match="no capture is held back"):
         job.resolve_held("discard")
+
+
+def test_object_details_list_the_observations_the_pin_and_the_corrections() -> None:
+    from console.objects_view import describe
+    from pipeline.map_fusion import fuse
+    from pipeline.scene import Capture
+
+    cam = {"fx": 320.0, "fy": 320.0, "cx": 320.0, "cy": 240.0, "width": 640.0, "height": 480.0}
+
+    def seen(cid: str, x: float, z: float, bbox) -> Scene:
+        o = SceneObject("d", "desk", (x, 3.0, z), (1.4, 0.75, 0.7), source=Source(cid, "depth", bbox=bbox))
+        return Scene(objects=(o,), captures=(Capture(cid, intrinsics=cam, camera_position=(2.0, 0.5, 0.35)),))
+
+    scene, _ = fuse(Scene(), seen("c1", 2.0, 0.675, (200.0, 150.0, 420.0, 330.0)))  # floats 0.3 m
+    scene, _ = fuse(scene, seen("c2", 2.3, 0.375, (0.0, 0.0, 640.0, 480.0)))  # the camera too close
+    text = describe(scene.objects[0])
+    assert "floating 0.30 m above the floor" in text
+    assert "Observations** (1 of 2 used)" in text
+    assert "| c1 | 2.52 m | 0.20 m / 20° | yes |" in text  # 0.05 + 0.06 m per metre; yaw 0.35 rad
+    assert "| c2 |" in text and "no: camera too close: the box covers the whole image" in text
+    assert "pinned" not in text
+    pinned = scene.objects[0].moved((2.0, 3.0, 0.375))
+    assert "**pinned**" in describe(pinned)
