@@ -318,7 +318,7 @@ class ConsoleApp:
             self.views["capture"] = CaptureView(server, session, colors=self.views["objects"].colors)
             from .camera_preview import live_preview
 
-            preview = live_preview(server, self.link)  # a live camera's low-rate preview (--camera), or None
+            preview = live_preview(server, self.link, notify=session.notify)  # a live camera's preview, or None
             if preview is not None:
                 self.views["camera_preview"] = preview
                 self._closers.append(preview.close)
