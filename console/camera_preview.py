@@ -10,7 +10,7 @@ from __future__ import annotations
 import html
 import logging
 import threading
-from typing import Any
+from typing import Any, Callable
 
 import numpy as np
 
@@ -58,11 +58,17 @@ class LivePreview:
         self._thread.join(timeout=2.0)
 
 
-def live_preview(server: Any, link: Any, interval: float = 0.5) -> LivePreview | None:
-    """Add the live preview to the current GUI container when ``link`` has a live camera."""
+def live_preview(server: Any, link: Any, interval: float = 0.5,
+                 notify: Callable[[str, str, str], None] | None = None) -> LivePreview | None:
+    """Add the live preview to the current GUI container when ``link`` has a live camera.
+
+    ``notify(title, body, level)`` (the session's) is told when the stream is lost or back.
+    """
     source = live_source(link)
     if source is None:
         return None
+    if notify is not None and getattr(source, "on_notice", None) is None:
+        source.on_notice = lambda text: notify("Live camera", text, "warning" if "lost" in text else "info")
     from .capture_view import placeholder
 
     status = server.gui.add_markdown("<small>live camera: connecting</small>")

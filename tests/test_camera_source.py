@@ -175,3 +175,27 @@ def test_the_camera_panel_preview_follows_the_live_camera(tmp_path: Path) -> Non
             assert wait_for(lambda: image.image is not first)  # it keeps following the stream
         finally:
             preview.close()
+
+
+def test_a_lost_stream_reaches_the_operator_as_a_notice() -> None:
+    from types import SimpleNamespace
+
+    from console.camera_preview import live_preview
+
+    gui = SimpleNamespace(add_markdown=lambda text: SimpleNamespace(content=text),
+                          add_image=lambda image, **kw: SimpleNamespace(image=image))
+    told: list[tuple[str, str, str]] = []
+    server = MjpegServer()
+    cam = CameraSource(f"http://127.0.0.1:{server.port}/stream.mjpg", CAMERA, lost_after=1.0, reconnect_every=0.3,
+                       open_timeout=2.0).start()
+    preview = live_preview(SimpleNamespace(gui=gui), SimpleNamespace(captures=cam, camera=None),
+                           interval=0.05, notify=lambda *n: told.append(n))
+    try:
+        assert preview is not None and wait_for(lambda: cam.frames > 2)
+        server.stop()
+        assert wait_for(lambda: any(level == "warning" and "stream lost" in body for _, body, level in told)), told
+        assert wait_for(lambda: "stream lost" in preview._status.content), preview._status.content
+    finally:
+        preview.close()
+        cam.close()
+        server.stop()
