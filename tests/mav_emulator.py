@@ -115,6 +115,7 @@ class ArduCopterEmulator:
         self.blocked = False
         self.frozen = False  # like a stopped process: silent, no physics, incoming handled late
         self.refuse_commands: set[int] = set()  # answered MAV_RESULT_UNSUPPORTED
+        self.ignore_modes: set[str] = set()  # mode changes to these are never answered
         self.deny_modes: dict[str, int] = {}
         self.ignore_commands: set[int] = set()
         self.prearm_failure: str | None = None
@@ -336,6 +337,8 @@ class ArduCopterEmulator:
             name = NAMES.get(int(m.param2))
             if name is None:
                 return self._ack(cmd, mav.MAV_RESULT_FAILED, conf)
+            if name in self.ignore_modes:
+                return None
             if self.deny_modes.get(name, 0) > 0:
                 self.deny_modes[name] -= 1
                 return self._ack(cmd, mav.MAV_RESULT_DENIED, conf)

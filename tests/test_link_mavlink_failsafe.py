@@ -73,6 +73,39 @@ def test_land_here_lands_where_the_vehicle_is_without_flying_back() -> None:
         assert math.dist(emu.pos[:2], here[:2]) < 0.05 and emu.pos[2] == 0.0
 
 
+def test_a_vehicle_heard_again_before_the_failsafe_landing_takes_effect_cancels_it() -> None:
+    """Fault 6, neighbour: the landing was decided but the vehicle has not taken it (no answer
+    yet) when it is heard again: the landing is cancelled, the robot holds, the mission pauses."""
+    with vehicle(config(retries=12, command_max_age=3.0, fly_speed=1.0)) as (link, emu):
+        _airborne(link)
+        manager = MissionManager(link, failsafe_after=0.8, failsafe_hold=0.5)
+        manager.start(_flight())
+        assert eventually(lambda: emu.pos[0] > 1.0, 10.0)
+        emu.ignore_modes = {"LAND"}
+        emu.heartbeat_enabled = emu.telemetry_enabled = False
+        assert eventually(lambda: any("landing where the robot is" in m for m in events(manager)), 10.0), \
+            events(manager)
+        emu.heartbeat_enabled = emu.telemetry_enabled = True
+        assert manager.wait(5.0, until=[MissionStatus.PAUSED]) is MissionStatus.PAUSED, events(manager)
+        assert any("before the failsafe landing took effect (landing cancelled)" in m for m in events(manager))
+        emu.ignore_modes = set()
+        time.sleep(0.5)
+        assert "LAND" not in emu.record.modes and emu.mode == "BRAKE"
+        assert emu.landed_state == mav.MAV_LANDED_STATE_IN_AIR
+
+
+def test_a_command_is_not_resent_after_its_max_age() -> None:
+    with vehicle(config(retries=50, command_max_age=1.0)) as (link, emu):
+        emu.ignore_commands.add(mav.MAV_CMD_COMPONENT_ARM_DISARM)
+        link.set_mode("GUIDED")
+        t0 = time.monotonic()
+        with pytest.raises(LinkError, match="no COMMAND_ACK from the vehicle after"):
+            link.arm()
+        assert time.monotonic() - t0 < 1.8
+        copies = [c for c, _ in emu.record.received if c == mav.MAV_CMD_COMPONENT_ARM_DISARM]
+        assert 3 <= len(copies) <= 6  # 1 s / 0.25 s per ACK wait (+1), not 51
+
+
 # --- 7. a blocked link -----------------------------------------------------------------------------
 
 

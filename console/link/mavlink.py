@@ -231,8 +231,10 @@ class MavlinkLink(RobotLink):
         fresh = known and pose_age <= cfg.pose_timeout
         still = fresh and math.sqrt(sum(c * c for c in vel)) < cfg.still_speed
         run = self._run
-        if run is not None and not run.done:
-            mode = _MOVING[run.segment.kind]
+        active = run is not None and not run.done
+        landing_started = landed_state == LANDED_LANDING or mode_name == cfg.land_mode
+        if active and (run.segment.kind is not SegmentKind.LAND or landing_started or landed):
+            mode = _MOVING[run.segment.kind]  # a LAND run is "landing" once the vehicle lands
         elif status >= 5:  # MAV_STATE_CRITICAL / EMERGENCY: the autopilot's failsafe acts
             mode = Mode.FAILSAFE
         elif landed_state == LANDED_TAKEOFF:
