@@ -184,6 +184,10 @@ def cmd_console(args: argparse.Namespace) -> int:
         raise CliError(f"--captures {args.captures}: no such folder")
     if args.models is not None and not Path(args.models).is_dir():
         raise CliError(f"--model-dir {args.models}: no such folder (fetch the models with: morphonavi models fetch NAME)")
+    if args.models is None and str(args.robot).startswith("mavlink:"):  # a real robot maps with the default folders
+        from pipeline.option_values import check_model_dir
+
+        check_model_dir(None)  # $MORPHONAVI_MODELS naming a file is an error, not "models missing"
     config = ConsoleConfig(
         robot=args.robot, scene_dir=args.scene if args.scene is not None else DEFAULT_SCENES,
         session_dir=args.session, host=args.host, port=args.port, models=args.models, fresh=args.fresh,

@@ -218,3 +218,12 @@ def test_bench_refuses_an_out_folder_and_a_zero_limit(tmp_path: Path, capsys: py
     assert main(["bench", str(tmp_path), "--limit", "0"]) == 2
     assert "--limit: must be at least 1, got 0" in capsys.readouterr().err
     assert sorted(tmp_path.iterdir()) == []
+
+
+def test_console_for_a_real_robot_refuses_models_env_pointing_at_a_file(tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
+                                                                         capsys: pytest.CaptureFixture[str]) -> None:
+    not_a_dir = tmp_path / "weights"
+    not_a_dir.write_bytes(b"x")
+    monkeypatch.setenv("MORPHONAVI_MODELS", str(not_a_dir))
+    code = main(["console", "--robot", "mavlink:udpin:127.0.0.1:0", "--session", str(tmp_path / "s"), "--port", "0"])
+    assert code == 2 and f"MORPHONAVI_MODELS={not_a_dir}: is a file" in capsys.readouterr().err
