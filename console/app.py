@@ -302,6 +302,9 @@ class ConsoleApp:
             self._job_bar = gui.add_progress_bar(0.0, visible=False, animated=True)
             self._job_md = gui.add_markdown(f"<small>perception: <b>{html.escape(perceiver.label)}</b></small>")
             cap.on_click(self._on_capture)
+            from .held_capture import HeldCaptureControls  # Merge / Replace / Discard a held-back capture
+
+            self.views["held_capture"] = HeldCaptureControls(server, session, self.mapping)
             self.views["grid"] = GridView(server, session)
             self.views["objects"] = ObjectsView(
                 server, session, on_node_click=lambda cid: paths_holder["p"].note_node_click(cid) if paths_holder else None,

@@ -99,3 +99,34 @@ def test_object_details_list_the_observations_the_pin_and_the_corrections() -> N
     assert "pinned" not in text
     pinned = scene.objects[0].moved((2.0, 3.0, 0.375))
     assert "**pinned**" in describe(pinned)
+
+
+def test_held_capture_buttons_show_while_a_capture_is_held_and_resolve_it(tmp_path: Path,
+                                                                          robots: list[SimRobot]) -> None:
+    import viser
+
+    from console.held_capture import HeldCaptureControls
+
+    server = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
+    try:
+        session = Session(tmp_path / "s", autosave=False)
+        perceiver = MapperPerceiver(GROUND_TRUTH_LABEL, ground_truth_bundle_for)
+        robots.append(_robot(2.5, 0.7, math.pi / 2 + 0.55))
+        robots.append(_robot(2.5, 0.7, math.pi / 2 + 0.55, world=_other_room()))
+        room_a, room_b = (MappingJob(session, r.capture, perceiver) for r in robots)
+        controls = HeldCaptureControls(server, session, room_b)
+        assert room_a.run() and not controls.buttons.visible
+        assert room_b.run() and room_b.held is not None
+        assert controls.buttons.visible
+        assert "cardboard_box" in {o.label for o in session.scene.objects}
+        kept = {o.id for o in session.scene.objects if o.label == "desk"}
+        pinned = next(iter(kept))
+        session.move_object(pinned, session.scene.object(pinned).position)  # the operator confirms one desk
+        done = controls.choose("Replace")
+        assert done is not None and "replace" in done and not controls.buttons.visible
+        labels = {o.label for o in session.scene.objects}
+        assert "sofa" in labels and "cardboard_box" not in labels  # room A's objects are gone ...
+        assert pinned in {o.id for o in session.scene.objects}  # ... but the pinned desk stays
+        assert controls.choose("Discard") is None  # nothing held any more: refused, told
+    finally:
+        server.stop()
