@@ -153,6 +153,10 @@ class ConsoleApp:
         restored: list[str] | None = None
         if not cfg.fresh:  # a bad file is kept aside by the session; SessionError (what to do) if it cannot be
             restored = session.restore_last()
+        from .recording import start_recording  # mission log (MCAP) in the session folder, closed last
+
+        self.recorder = start_recording(session)
+        self._closers.append(self.recorder.close)
         perceiver = self._perceiver_override or self._choose_perceiver()
         self.mapping = MappingJob(session, self._take_photo, perceiver)
         self.runner = self._make_runner()
