@@ -124,24 +124,28 @@ def evaluate(scene: Scene, in_view: set[str]) -> dict[str, float]:
             "median": float(np.median(e)), "p95": float(np.percentile(e, 95)), "off_floor": off_floor}
 
 
-Merge = Callable[[Scene, Scene], Scene]
+Merge = Callable[[Scene, Scene], "tuple[Scene, bool]"]
+"""``merge(map, observations) -> (map, held back)``."""
 
 
-def _fused(scene: Scene, obs: Scene) -> Scene:
-    return fuse(scene, obs)[0]
+def _fused(scene: Scene, obs: Scene) -> tuple[Scene, bool]:
+    merged, report = fuse(scene, obs)
+    return merged, report.held_back is not None
 
 
-def _legacy(scene: Scene, obs: Scene) -> Scene:
-    return merge_observations(scene, obs)[0]
+def _legacy(scene: Scene, obs: Scene) -> tuple[Scene, bool]:
+    return merge_observations(scene, obs)[0], False
 
 
 def run(shots: Sequence[tuple[tuple[float, float, float], Scene, set[str]]], merge: Merge) -> dict[str, float]:
     scene: Scene = Scene()
     seen: set[str] = set()
+    held = 0
     for _, obs, ids in shots:
-        scene = merge(scene, obs)
+        scene, was_held = merge(scene, obs)
+        held += was_held
         seen |= ids
-    return evaluate(scene, seen)
+    return {**evaluate(scene, seen), "held": held}
 
 
 def main(argv: Sequence[str]) -> None:
@@ -155,14 +159,14 @@ def main(argv: Sequence[str]) -> None:
     rng = np.random.default_rng(seed) if noise else None
     shots = [(pose, *shoot(pose, f"tour-{k}", rng)) for k, pose in enumerate(TOUR)]
     good = [s for s in shots if s[0] not in BAD]
-    first = evaluate(_fused(Scene(), shots[0][1]), shots[0][2])
+    first = evaluate(_fused(Scene(), shots[0][1])[0], shots[0][2])
     print(f"tour of {len(TOUR)} captures ({len(BAD)} bad), perception: ground truth"
           + (f" + noise (seed {seed})" if noise else "") + f"; one capture alone: median {first['median']:.3f} m")
     for name, merge in (("former merge", _legacy), ("map fusion  ", _fused)):
         r, g = run(shots, merge), run(good, merge)
         print(f"{name}: {r['mapped']} mapped; of {r['in_view']} true objects in view {r['once']} mapped "
               f"({r['missing']} not: {', '.join(r['missing_ids'])}), {r['duplicates']} duplicates, {r['false']} false; centre error median "
-              f"{r['median']:.3f} m, p95 {r['p95']:.3f} m; {r['off_floor']} floor objects off the floor > 0.05 m; "
+              f"{r['median']:.3f} m, p95 {r['p95']:.3f} m; {r['held']} captures held back; {r['off_floor']} floor objects off the floor > 0.05 m; "
               f"without the bad captures median {g['median']:.3f} m (bad ones add {r['median'] - g['median']:+.3f} m)")
 
 
