@@ -37,21 +37,19 @@ import numpy as np
 from pipeline.geometry import CameraMount, Intrinsics, camera_pose_in_world
 from planner.mission import MissionSegment, SegmentKind
 
-from .base import CaptureResult, LinkError, LinkTimeout, Mode, RobotLink, RobotState, RunStatus, SegmentRun
+from .base import CaptureResult, LinkError, LinkTimeout, RobotLink, RobotState, RunStatus, SegmentRun
 from .captures import CapturesFolder
 from .mavlink_commands import (POSITION_ONLY_MASK, POSITION_YAW_MASK, SPEED_CLIMB, SPEED_DESCENT, SPEED_GROUND,
                                VELOCITY_ONLY_MASK, Commander, Stopped, copter_modes)
 from .mavlink_config import GroundMotion, MavlinkConfig
-from .mavlink_telemetry import (LANDED_IN_AIR, LANDED_LANDING, LANDED_ON_GROUND, LANDED_TAKEOFF, LANDED_UNDEFINED,
-                                STATUSTEXT_IN_STATE, Telemetry, Vehicle)
+from .mavlink_state import landed, make_state
+from .mavlink_telemetry import LANDED_IN_AIR, LANDED_LANDING, LANDED_ON_GROUND, LANDED_TAKEOFF, Telemetry, Vehicle
 from .mavlink_transport import MavTransport, StreamKeeper, parse_connection
 from .ned import NedFrame
 
 log = logging.getLogger(__name__)
 
 Vec3 = tuple[float, float, float]
-_MOVING = {SegmentKind.WALK: Mode.WALKING, SegmentKind.TAKEOFF: Mode.TAKING_OFF, SegmentKind.FLY: Mode.FLYING,
-           SegmentKind.LAND: Mode.LANDING}
 
 
 class MavlinkLink(RobotLink):
@@ -196,74 +194,12 @@ class MavlinkLink(RobotLink):
         return max(hb, pose) if math.isfinite(pose) else hb
 
     def _landed(self, v: Vehicle) -> bool:
-        if v.landed_state != LANDED_UNDEFINED:
-            return v.landed_state == LANDED_ON_GROUND
-        if v.pos_ned is None:
-            return not v.armed
-        floor_down = -self.config.ned.altitude(self.config.floor)
-        return not v.armed and v.pos_ned[2] > floor_down - 0.1
+        return landed(v, self.config)
 
     def _make_state(self) -> RobotState | None:
-        cfg, ned, tel = self.config, self.config.ned, self.telemetry
-        readiness = tel.readiness(cfg.pose_timeout)
-        now = time.monotonic()
-        with tel.lock:
-            v = tel.v
-            if v.system is None:
-                return None
-            age = now - v.last_heartbeat
-            pose_age = now - v.pos_time
-            pos = ned.to_world(v.pos_ned) if v.pos_ned is not None else ned.origin
-            vel = ned.velocity_to_world(v.vel_ned)
-            yaw = ned.yaw_to_world(v.yaw_ned)
-            landed = self._landed(v)
-            mode_name = self.commander.mode_names.get(v.custom_mode, f"mode {v.custom_mode}") \
-                if v.custom_mode is not None else ""
-            status, armed = v.system_status, v.armed
-            battery, voltage, landed_state = v.battery, v.voltage, v.landed_state
-            messages = tuple((s.number, s.text) for s in v.statustext[-STATUSTEXT_IN_STATE:])
-            invalid = v.last_invalid if v.last_invalid and now - v.last_invalid[0] < 2.0 else None
-            invalid_total = sum(v.invalid.values())
-            warnings = tuple(v.warnings.values())
-            epoch = v.epoch
-        hb_ok = age <= cfg.heartbeat_timeout
-        known = math.isfinite(pose_age)
-        fresh = known and pose_age <= cfg.pose_timeout
-        still = fresh and math.sqrt(sum(c * c for c in vel)) < cfg.still_speed
         run = self._run
-        active = run is not None and not run.done
-        landing_started = landed_state == LANDED_LANDING or mode_name == cfg.land_mode
-        if active and (run.segment.kind is not SegmentKind.LAND or landing_started or landed):
-            mode = _MOVING[run.segment.kind]  # a LAND run is "landing" once the vehicle lands
-        elif status >= 5:  # MAV_STATE_CRITICAL / EMERGENCY: the autopilot's failsafe acts
-            mode = Mode.FAILSAFE
-        elif landed_state == LANDED_TAKEOFF:
-            mode = Mode.TAKING_OFF
-        elif landed_state == LANDED_LANDING or (mode_name == cfg.land_mode and not landed):
-            mode = Mode.LANDING
-        elif landed:
-            mode = Mode.IDLE if still or not fresh else Mode.WALKING
-        else:
-            mode = Mode.HOLDING if still else Mode.FLYING
-        why_invalid = f"{invalid[1]}, {invalid_total} invalid message(s) dropped" if invalid else ""
-        if not hb_ok:
-            health = f"no heartbeat for {age:.1f} s"
-        elif known and not fresh:
-            health = f"stale: no valid position for {pose_age:.1f} s" + (f" ({why_invalid})" if why_invalid else "")
-        elif not known:
-            health = "position unknown: " + (why_invalid or "no LOCAL_POSITION_NED yet (no position estimate?)")
-        elif why_invalid:
-            health = f"invalid telemetry dropped: {why_invalid}"
-        elif status >= 5:
-            health = "autopilot failsafe (system status CRITICAL/EMERGENCY)"
-        else:
-            health = "ok"
-        return RobotState(time=time.time(), position=pos, yaw=yaw, velocity=vel, mode=mode, armed=armed,
-                          landed=landed, battery=battery, battery_voltage=voltage,
-                          link_ok=hb_ok and (fresh or not known), link_age=age if math.isfinite(age) else 1e9,
-                          health=health, autopilot_mode=mode_name, messages=messages, position_valid=fresh,
-                          pose_age=pose_age, ready=not readiness, readiness=readiness, warnings=warnings,
-                          link_epoch=epoch)
+        kind = run.segment.kind if run is not None and not run.done else None
+        return make_state(self.telemetry, self.config, kind, self.commander.mode_names)
 
     # --- commands (see Commander) ----------------------------------------------------------------
     def command(self, command: int, params: tuple[float, ...], what: str, **kw: Any) -> None:
