@@ -104,7 +104,8 @@ def link_options(args: argparse.Namespace) -> dict[str, object]:
     from .link.ned import NedFrame
 
     ned = NedFrame(origin=args.ned_origin, north_yaw=math.radians(args.north_deg))
-    options: dict[str, object] = {"config": MavlinkConfig(ned=ned, ground=GroundMotion(command=args.ground_command))}
+    options: dict[str, object] = {"config": MavlinkConfig(ned=ned, ground=GroundMotion(command=args.ground_command)),
+                                  "tlog": args.session}  # the MAVLink traffic, as a .tlog in the session folder
     source = camera_source(args)
     if source is not None:
         options.update(camera=source, mount=source.camera.mount)  # type: ignore[attr-defined]
