@@ -181,6 +181,11 @@ class Reachability:
         ws = grid.workspace
         xs, ys, _ = ws.axes()
         self._xy = np.stack(np.meshgrid(xs, ys, indexing="ij"), axis=-1)  # [nx, ny, 2]
+        flat = self._xy.reshape(-1, 2)
+        clearance = np.full(len(flat), np.inf)  # [m] from each ground cell's centre to the nearest footprint
+        for o in self.objects:
+            clearance = np.minimum(clearance, footprint_distance(o, flat))
+        self._clearance = clearance.reshape(self._xy.shape[:2])
 
     def approach(self, obj: SceneObject, plan: bool = True) -> Approach:
         """Where to stand beside ``obj`` and how to get there (see the module docstring)."""
@@ -202,7 +207,7 @@ class Reachability:
             idx, pts, gap = idx[near], pts[near], gap[near]
             to_start = np.hypot(pts[:, 0] - self.start[0], pts[:, 1] - self.start[1])
             order = np.lexsort((idx[:, 1], idx[:, 0], np.round(to_start, 6), np.round(gap, 6)))
-            best = next((int(b) for b in order if self._clear(pts[b]) and self._in_reach(obj, pts[b])), None)
+            best = next((int(b) for b in order if self._clear(idx[b]) and self._in_reach(obj, pts[b])), None)
             if best is None:
                 continue
             goal = (float(pts[best, 0]), float(pts[best, 1]), float(ws.floor))
@@ -219,10 +224,9 @@ class Reachability:
                       "(closed in by obstacles)")
         return Approach(obj.id, "none", reason=reason)
 
-    def _clear(self, xy: np.ndarray) -> bool:
-        """Whether ``xy`` (world [m]) keeps the robot's radius from every object's footprint."""
-        m = self.grid.margin
-        return all(float(footprint_distance(o, xy[None, :])[0]) >= m for o in self.objects)
+    def _clear(self, cell: np.ndarray) -> bool:
+        """Whether ground cell ``(i, j)``'s centre keeps the robot's radius from every object's footprint."""
+        return bool(self._clearance[cell[0], cell[1]] >= self.grid.margin)
 
     def _in_reach(self, obj: SceneObject, xy: np.ndarray) -> bool:
         """Whether the straight line from ``xy`` (world [m]) to the nearest point of ``obj``'s

@@ -109,30 +109,26 @@ def _wrap(a: np.ndarray | float) -> Any:
 
 def _polygon_gap(a: np.ndarray, b: np.ndarray) -> float:
     """Distance [m] between two convex polygons ``[n, 2]`` (0 when they overlap)."""
-    def inside(p: np.ndarray, poly: np.ndarray) -> bool:
-        e = np.roll(poly, -1, axis=0) - poly
-        r = p - poly
-        cross = e[:, 0] * r[:, 1] - e[:, 1] * r[:, 0]
-        return bool(np.all(cross >= -1e-12) or np.all(cross <= 1e-12))
+    def inside(pts: np.ndarray, poly: np.ndarray) -> np.ndarray:
+        e = np.roll(poly, -1, axis=0) - poly  # [m, 2]
+        r = pts[:, None, :] - poly[None, :, :]  # [n, m, 2]
+        cross = e[None, :, 0] * r[:, :, 1] - e[None, :, 1] * r[:, :, 0]
+        return np.all(cross >= -1e-12, axis=1) | np.all(cross <= 1e-12, axis=1)
 
-    def seg_dist(p: np.ndarray, s0: np.ndarray, s1: np.ndarray) -> float:
-        d = s1 - s0
-        t = float(np.clip(np.dot(p - s0, d) / max(np.dot(d, d), 1e-18), 0.0, 1.0))
-        return float(np.linalg.norm(p - (s0 + t * d)))
+    def seg_dist(pts: np.ndarray, poly: np.ndarray) -> float:
+        s0 = poly
+        d = np.roll(poly, -1, axis=0) - poly  # [m, 2]
+        r = pts[:, None, :] - s0[None, :, :]  # [n, m, 2]
+        t = np.clip(np.einsum("nmk,mk->nm", r, d) / np.maximum(np.einsum("mk,mk->m", d, d), 1e-18), 0.0, 1.0)
+        return float(np.min(np.linalg.norm(r - t[:, :, None] * d[None, :, :], axis=2)))
 
-    if any(inside(p, b) for p in a) or any(inside(p, a) for p in b):
+    if inside(a, b).any() or inside(b, a).any():
         return 0.0
-    best = math.inf
-    for P, Q in ((a, b), (b, a)):
-        for p in P:
-            for i in range(len(Q)):
-                best = min(best, seg_dist(p, Q[i], Q[(i + 1) % len(Q)]))
-    # edges that cross each other with no vertex inside (a plus shape)
-    for i in range(len(a)):
+    for i in range(len(a)):  # edges crossing with no vertex inside (a plus shape)
         for j in range(len(b)):
             if _segments_cross(a[i], a[(i + 1) % len(a)], b[j], b[(j + 1) % len(b)]):
                 return 0.0
-    return best
+    return min(seg_dist(a, b), seg_dist(b, a))
 
 
 def _segments_cross(p1: np.ndarray, p2: np.ndarray, q1: np.ndarray, q2: np.ndarray) -> bool:
