@@ -8,8 +8,11 @@ costs exactly what ``skimage.graph.MCP_Geometric`` charges:
 is 0). As in MCP, any of the 26 moves is allowed when its destination is passable, unless
 ``no_corner_cutting`` is set.
 
-The heuristic is ``min_cost * resolution * octile(a, goal)`` where ``octile`` is the 3D octile
-distance (in cells) and ``min_cost`` the smallest finite cost in the grid.
+The heuristic is first ``min_cost * resolution * octile(a, goal)`` where ``octile`` is the 3D
+octile distance (in cells) and ``min_cost`` the smallest finite cost in the grid. When that is not
+enough (more than ``max(nx * ny, LAYER_BUDGET_MIN)`` expansions, typically when the only way is to
+fly), the search builds the per-goal layer-aware heuristic of :mod:`planner.heuristic` and
+continues with it (the open list re-keyed; the closed cells kept).
 
 The compiled kernel (numba) keeps flat C-order indices in an indexed binary heap (each open cell
 once, decrease-key through a cell -> heap-slot map; measured about 2x faster than lazy deletion,
@@ -22,14 +25,15 @@ search, so a search touches only the cells it visits (no per-call O(grid) reset)
 from __future__ import annotations
 
 import heapq
-import itertools
 import math
 import threading
 from dataclasses import dataclass
 from typing import Sequence
 
 import numpy as np
-from numba import njit
+
+from .astar_kernel import _move_table, _moves, _MoveTable, _rekey, _search, _swept, _trace, octile_distance
+from .heuristic import LayerHeuristic, build_layer_heuristic
 
 __all__ = [
     "AStarResult",
@@ -40,10 +44,13 @@ __all__ = [
     "octile_distance",
 ]
 
-_SQ2 = math.sqrt(2.0)
-_SQ3 = math.sqrt(3.0)
 _MAX_GEN = (1 << 30) - 1  # stamps 2*gen and 2*gen+1 must fit int32
 _HEAP_START = 4096
+LAYER_BUDGET_MIN = 16384  # default: expansions before the layer-aware heuristic is built (>= nx * ny)
+_NEVER = np.iinfo(np.int64).max
+_MARGIN = 1.0 - 1e-9  # the layer-aware bound times this: still consistent, safe against rounding
+_NO_LAYER = LayerHeuristic(np.zeros(1), np.zeros(1, np.int64), np.zeros(0, np.int64), np.zeros((0, 1)),
+                           np.zeros(1), 0.0, 0)  # placeholder tables while the octile bound is used
 
 
 @dataclass(frozen=True)
@@ -55,275 +62,15 @@ class AStarResult:
         cost: Path cost (sum of edge costs) [cost · m]; ``inf`` when no path.
         expanded: Cells taken off the open list and expanded (goal included).
         found: Whether the goal was reached.
+        heuristic: ``"octile"``, or ``"layer"`` when the search switched to the layer-aware
+            heuristic (:mod:`planner.heuristic`) after its budget of expansions.
     """
 
     path: np.ndarray
     cost: float
     expanded: int
     found: bool
-
-
-# --------------------------------------------------------------------------- moves
-
-
-def _moves() -> list[tuple[int, int, int]]:
-    """The 26 neighbour offsets, in a fixed order."""
-    return [d for d in itertools.product((-1, 0, 1), repeat=3) if d != (0, 0, 0)]
-
-
-def _swept(d: tuple[int, int, int]) -> list[tuple[int, int, int]]:
-    """Axis-aligned cells a diagonal move ``d`` sweeps past: every non-empty proper subset
-    of its non-zero components (2 cells for a planar diagonal, 6 for a 3D diagonal)."""
-    axes = [a for a in range(3) if d[a] != 0]
-    out = []
-    for r in range(1, len(axes)):
-        for sub in itertools.combinations(axes, r):
-            out.append(tuple(d[a] if a in sub else 0 for a in range(3)))
-    return out
-
-
-@dataclass(frozen=True)
-class _MoveTable:
-    """Per-shape move tables for the kernel."""
-
-    flat: np.ndarray  # int64[26] flat index offsets
-    dx: np.ndarray  # int64[26]
-    dy: np.ndarray
-    dz: np.ndarray
-    swept: np.ndarray  # int64[26, 6] flat offsets of swept cells
-    n_swept: np.ndarray  # int64[26]
-
-
-def _move_table(shape: tuple[int, int, int]) -> _MoveTable:
-    _, ny, nz = shape
-    moves = _moves()
-    d = np.array(moves, dtype=np.int64)
-    flat = d[:, 0] * (ny * nz) + d[:, 1] * nz + d[:, 2]
-    swept = np.zeros((26, 6), dtype=np.int64)
-    n_swept = np.zeros(26, dtype=np.int64)
-    for i, m in enumerate(moves):
-        cells = _swept(m)
-        n_swept[i] = len(cells)
-        for j, c in enumerate(cells):
-            swept[i, j] = c[0] * (ny * nz) + c[1] * nz + c[2]
-    return _MoveTable(flat, d[:, 0].copy(), d[:, 1].copy(), d[:, 2].copy(), swept, n_swept)
-
-
-def octile_distance(a: Sequence[int], b: Sequence[int]) -> float:
-    """3D octile distance [cells]: the shortest 26-connected lattice path length between two
-    cells when a move of ``n`` non-zero components has length ``sqrt(n)``."""
-    d = sorted((abs(int(a[0]) - int(b[0])), abs(int(a[1]) - int(b[1])), abs(int(a[2]) - int(b[2]))))
-    c, m, x = d
-    return x + (_SQ2 - 1.0) * m + (_SQ3 - _SQ2) * c
-
-
-# --------------------------------------------------------------------------- kernel
-
-
-@njit(cache=True, inline="always")
-def _sift_up(hk, hi, hpos, pos, f, g, v):
-    """Move the record ``(f, g, v)`` from slot ``pos`` towards the root; returns its final slot.
-    Order: smaller f first; on equal f, larger g first (deeper nodes, fewer expansions)."""
-    while pos > 0:
-        par = (pos - 1) >> 1
-        pf = hk[par, 0]
-        pg = hk[par, 1]
-        if pf < f or (pf == f and pg >= g):
-            break
-        hk[pos, 0] = pf
-        hk[pos, 1] = pg
-        w = hi[par]
-        hi[pos] = w
-        hpos[w] = pos
-        pos = par
-    hk[pos, 0] = f
-    hk[pos, 1] = g
-    hi[pos] = v
-    hpos[v] = pos
-    return pos
-
-
-@njit(cache=True, inline="always")
-def _sift_down(hk, hi, hpos, pos, n, f, g, v):
-    """Move the record ``(f, g, v)`` from slot ``pos`` towards the leaves of a heap of size ``n``."""
-    while True:
-        c = 2 * pos + 1
-        if c >= n:
-            break
-        cf = hk[c, 0]
-        cg = hk[c, 1]
-        r = c + 1
-        if r < n:
-            rf = hk[r, 0]
-            rg = hk[r, 1]
-            if rf < cf or (rf == cf and rg > cg):
-                c = r
-                cf = rf
-                cg = rg
-        if cf < f or (cf == f and cg > g):
-            hk[pos, 0] = cf
-            hk[pos, 1] = cg
-            w = hi[c]
-            hi[pos] = w
-            hpos[w] = pos
-            pos = c
-        else:
-            break
-    hk[pos, 0] = f
-    hk[pos, 1] = g
-    hi[pos] = v
-    hpos[v] = pos
-
-
-@njit(cache=True, inline="always")
-def _octile(ax, ay, az, bx, by, bz):
-    """3D octile distance [cells] (see :func:`octile_distance`)."""
-    a = abs(ax - bx)
-    b = abs(ay - by)
-    c = abs(az - bz)
-    if a < b:
-        a, b = b, a
-    if b < c:
-        b, c = c, b
-    if a < b:
-        a, b = b, a
-    return a + 0.41421356237309515 * b + 0.31783724519578205 * c
-
-
-@njit(cache=True)
-def _core(cost, nx, ny, nz, t, elen, hscale, no_cc,
-          offs, ddx, ddy, ddz, swept, n_swept,
-          gbuf, state, parent, hpos, open_tag, hk, hi, n, expanded):
-    """Run A* until the goal is closed (status 1), the heap empties (0) or might overflow during
-    the next expansion (2, resumable: grow the heap and call again). ``state[i] == open_tag``
-    marks a cell whose g is valid in this search (and, until it is closed, whose heap slot is
-    ``hpos[i]``), ``open_tag + 1`` a closed one. Returns ``(status, heap size, expanded, cost)``."""
-    closed_tag = open_tag + 1
-    nyz = ny * nz
-    tx = t // nyz
-    ty = (t // nz) % ny
-    tz = t % nz
-    cap = hi.size
-    while n > 0:
-        if n + 26 > cap:
-            return 2, n, expanded, 0.0
-        g0 = hk[0, 1]
-        u = hi[0]
-        n -= 1
-        if n > 0:
-            _sift_down(hk, hi, hpos, 0, n, hk[n, 0], hk[n, 1], hi[n])
-        state[u] = closed_tag
-        expanded += 1
-        if u == t:
-            return 1, n, expanded, g0
-        ux = u // nyz
-        uy = (u // nz) % ny
-        uz = u % nz
-        cu = cost[u]
-        interior = 0 < ux < nx - 1 and 0 < uy < ny - 1 and 0 < uz < nz - 1
-        for d in range(26):
-            vx = ux + ddx[d]
-            vy = uy + ddy[d]
-            vz = uz + ddz[d]
-            if not interior:
-                if vx < 0 or vx >= nx or vy < 0 or vy >= ny or vz < 0 or vz >= nz:
-                    continue
-            v = u + offs[d]
-            cv = cost[v]
-            if cv == np.inf:
-                continue
-            sv = state[v]
-            if sv == closed_tag:
-                continue
-            if no_cc:
-                blocked = False
-                for j in range(n_swept[d]):
-                    if cost[u + swept[d, j]] == np.inf:
-                        blocked = True
-                        break
-                if blocked:
-                    continue
-            ng = g0 + elen[d] * (cu + cv)
-            if sv == open_tag:
-                if ng >= gbuf[v]:
-                    continue
-                gbuf[v] = ng
-                parent[v] = d
-                p = hpos[v]
-                nf = ng + hscale * _octile(vx, vy, vz, tx, ty, tz)
-                if _sift_up(hk, hi, hpos, p, nf, ng, v) == p:
-                    _sift_down(hk, hi, hpos, p, n, nf, ng, v)
-            elif ng != np.inf:
-                gbuf[v] = ng
-                state[v] = open_tag
-                parent[v] = d
-                _sift_up(hk, hi, hpos, n, ng + hscale * _octile(vx, vy, vz, tx, ty, tz), ng, v)
-                n += 1
-    return 0, n, expanded, np.inf
-
-
-@njit(cache=True)
-def _search(cost, nx, ny, nz, s, t, step, hscale, no_cc,
-            offs, ddx, ddy, ddz, swept, n_swept,
-            gbuf, state, parent, hpos, gen, hk, hi):
-    """A* from flat index ``s`` to ``t``; returns ``(found, cost, expanded, hk, hi)`` where the
-    heap arrays may have been replaced by larger ones. ``step`` is the cell size [m],
-    ``hscale = weight * min_cost * step``. Keeping the growth out of the hot loop lets numba
-    treat the heap arrays there as loop-invariant."""
-    open_tag = 2 * gen
-    elen = np.empty(26)
-    for d in range(26):
-        ex = step * ddx[d]
-        ey = step * ddy[d]
-        ez = step * ddz[d]
-        elen[d] = np.sqrt(ex * ex + ey * ey + ez * ez) * 0.5
-    nyz = ny * nz
-    gbuf[s] = 0.0
-    state[s] = open_tag
-    parent[s] = -1
-    h0 = hscale * _octile(s // nyz, (s // nz) % ny, s % nz, t // nyz, (t // nz) % ny, t % nz)
-    _sift_up(hk, hi, hpos, 0, h0, 0.0, s)
-    n = 1
-    expanded = 0
-    while True:
-        status, n, expanded, c = _core(cost, nx, ny, nz, t, elen, hscale, no_cc, offs, ddx, ddy, ddz,
-                                       swept, n_swept, gbuf, state, parent, hpos, open_tag, hk, hi, n,
-                                       expanded)
-        if status != 2:
-            return status == 1, c, expanded, hk, hi
-        cap = 2 * hi.size
-        nk = np.empty((cap, 2))
-        ni = np.empty(cap, hi.dtype)
-        nk[:n] = hk[:n]
-        ni[:n] = hi[:n]
-        hk, hi = nk, ni
-
-
-@njit(cache=True)
-def _trace(parent, s, t, ny, nz, offs, ddx, ddy, ddz):
-    """Cell path ``[K, 3]`` from ``s`` to ``t`` following the parent move indices."""
-    k = 1
-    v = t
-    while v != s:
-        v -= offs[parent[v]]
-        k += 1
-    path = np.empty((k, 3), np.int64)
-    nyz = ny * nz
-    v = t
-    x = t // nyz
-    y = (t // nz) % ny
-    z = t % nz
-    for i in range(k - 1, -1, -1):
-        path[i, 0] = x
-        path[i, 1] = y
-        path[i, 2] = z
-        if i > 0:
-            d = parent[v]
-            v -= offs[d]
-            x -= ddx[d]
-            y -= ddy[d]
-            z -= ddz[d]
-    return path
+    heuristic: str = "octile"
 
 
 # --------------------------------------------------------------------------- Python API
@@ -421,6 +168,8 @@ class AStarSearcher:
         heuristic_weight: float | None = None,
         min_cost: float | None = None,
         no_corner_cutting: bool = False,
+        layer_heuristic: bool = True,
+        layer_budget: int | None = None,
     ) -> AStarResult:
         """Least-cost path from ``start`` to ``goal``; see :func:`astar`."""
         arr = _as_cost(cost)
@@ -435,17 +184,44 @@ class AStarSearcher:
         if not (mc >= 0 and math.isfinite(mc)):
             raise ValueError(f"min_cost must be a finite number >= 0, got {min_cost}")
         nx, ny, nz = arr.shape
+        if layer_budget is None:
+            budget = max(nx * ny, LAYER_BUDGET_MIN)
+        elif (isinstance(layer_budget, (bool, np.bool_)) or not isinstance(layer_budget, (int, np.integer))
+              or layer_budget < 0):
+            raise ValueError(f"layer_budget must be an integer >= 0 (expansions), got {layer_budget!r}")
+        else:
+            budget = int(layer_budget)
+        if not layer_heuristic or w == 0.0:
+            budget = _NEVER
         mt = self._prepare((nx, ny, nz))
         fs = (s[0] * ny + s[1]) * nz + s[2]
         ft = (t[0] * ny + t[1]) * nz + t[2]
-        found, c, expanded, self._hk, self._hi = _search(
-            arr.reshape(-1), nx, ny, nz, fs, ft, float(resolution), w * mc * float(resolution),
-            bool(no_corner_cutting), mt.flat, mt.dx, mt.dy, mt.dz, mt.swept, mt.n_swept,
-            self._g, self._state, self._parent, self._hpos, self._gen, self._hk, self._hi)
-        if not found:
-            return AStarResult(np.zeros((0, 3), np.int64), math.inf, int(expanded), False)
+        flat = arr.reshape(-1)
+        hscale = w * mc * float(resolution)
+        lay = False
+        lh = _NO_LAYER
+        n = 0
+        expanded = 0
+        while True:
+            status, c, expanded, n, self._hk, self._hi = _search(
+                flat, nx, ny, nz, fs, ft, float(resolution), hscale,
+                bool(no_corner_cutting), mt.flat, mt.dx, mt.dy, mt.dz, mt.swept, mt.n_swept,
+                self._g, self._state, self._parent, self._hpos, self._gen, self._hk, self._hi, n, expanded,
+                lay, w * _MARGIN, lh.d2, lh.rcol, lh.levels, lh.dw, lh.s, lh.mfres, lh.zg, budget)
+            if status != 3:
+                break
+            # The octile bound was not enough within the budget: build the per-goal tables and
+            # continue the same search with the stronger (consistent) heuristic.
+            lh = build_layer_heuristic(arr, t, float(resolution))
+            lay = True
+            budget = _NEVER
+            _rekey(self._hk, self._hi, self._hpos, n, nx, ny, nz, ft, hscale, w * _MARGIN, lh.d2, lh.rcol,
+                   lh.levels, lh.dw, lh.s, lh.mfres, lh.zg)
+        kind = "layer" if lay else "octile"
+        if status != 1:
+            return AStarResult(np.zeros((0, 3), np.int64), math.inf, int(expanded), False, kind)
         path = _trace(self._parent, fs, ft, ny, nz, mt.flat, mt.dx, mt.dy, mt.dz)
-        return AStarResult(path, float(c), int(expanded), True)
+        return AStarResult(path, float(c), int(expanded), True, kind)
 
 
 _local = threading.local()
@@ -460,6 +236,8 @@ def astar(
     heuristic_weight: float | None = None,
     min_cost: float | None = None,
     no_corner_cutting: bool = False,
+    layer_heuristic: bool = True,
+    layer_budget: int | None = None,
 ) -> AStarResult:
     """Least-cost 26-connected path through ``cost[nx, ny, nz]`` from ``start`` to ``goal`` cells.
 
@@ -474,12 +252,22 @@ def astar(
             :func:`min_finite_cost`); otherwise one pass over the grid computes it.
         no_corner_cutting: Forbid a diagonal move when any axis-aligned cell it sweeps past
             is impassable. Default off, which matches ``MCP_Geometric``'s moves.
+        layer_heuristic: Allow the switch to the layer-aware heuristic (:mod:`planner.heuristic`).
+        layer_budget: Expansions made with the octile bound alone before the per-goal tables of
+            the layer-aware heuristic are built and the open list re-keyed (``None``:
+            ``max(nx * ny, LAYER_BUDGET_MIN)``, so the O(nx * ny) tables cost at most about what
+            the search already spent; small searches, such as the console's, never build them;
+            0: from the start).
 
-    The heuristic ``h(a) = min_cost * resolution * octile(a, goal)`` is consistent: octile is
+    The first heuristic ``h(a) = min_cost * resolution * octile(a, goal)`` is consistent: octile is
     the shortest-path metric of the 26-lattice with move lengths ``sqrt(n)``, so it obeys the
     triangle inequality, and for one move ``a -> b`` of length ``L = resolution * octile(a, b)``,
     ``h(a) - h(b) <= min_cost * L <= L * (cost[a] + cost[b]) / 2 = edge(a, b)``; with
-    ``h(goal) = 0`` it is also admissible.
+    ``h(goal) = 0`` it is also admissible. The layer-aware heuristic is the max of this one and
+    a per-goal bound (consistent and admissible too, proof in :mod:`planner.heuristic`); a max of
+    consistent heuristics is consistent. Switching mid-search keeps the path optimal: every
+    closed cell already has its optimal g (the octile bound is consistent), and A* with a
+    consistent heuristic from any such state closes the goal only at its optimal cost.
 
     Raises:
         ValueError: start/goal outside the grid or impassable, bad cost grid or parameters.
@@ -488,7 +276,8 @@ def astar(
     if searcher is None:
         searcher = _local.searcher = AStarSearcher()
     return searcher.search(cost, start, goal, resolution=resolution, heuristic_weight=heuristic_weight,
-                           min_cost=min_cost, no_corner_cutting=no_corner_cutting)
+                           min_cost=min_cost, no_corner_cutting=no_corner_cutting,
+                           layer_heuristic=layer_heuristic, layer_budget=layer_budget)
 
 
 def dijkstra_reference(

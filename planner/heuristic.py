@@ -1,0 +1,445 @@
+"""The layer-aware A* heuristic: an exact-by-construction lower bound built per goal in 2D.
+
+Grid ``cost[nx, ny, nz]`` as in :mod:`planner.astar` (per-cell cost [1/m], ``inf`` impassable,
+``k = 0`` ground); an edge ``a -> b`` costs ``res * len * (c_a + c_b) / 2`` with
+``len = sqrt(h² + v²)``, ``h`` its horizontal length (0, 1 or √2 cells) and ``v`` its vertical
+one (0 or 1). Columns ``q = (i, j)``; ``zlo(q)`` is the lowest passable layer of column ``q``.
+
+**Per goal** (``t = (tx, ty, zg)``), all on the ``nx x ny`` columns plus one pass over the grid:
+
+- ``mc[k]``: smallest cost of layer ``k``; ``mf`` the smallest over the flight layers ``k >= 2``;
+  ``S(k) = Σ_{j<k} P(j)`` with ``P(j) = res (mc[j] + mc[j+1]) / 2``: a lower bound of the cost of
+  crossing layer boundaries ``0..k`` vertically (each such crossing is a move whose mean cost is
+  at least ``(mc[j] + mc[j+1]) / 2`` and whose length is at least 1).
+- ``π(q) = min(μ(q), (√2-1) λ(q), (√2-1) mf)`` with ``μ(q)`` the column's smallest cost and
+  ``λ(q)`` a lower bound of the mean cost of any climbing move touching the column;
+  ``D2(q)``: 8-connected 2D Dijkstra from the goal column with edge ``res h (π(q) + π(q')) / 2``.
+- ``R(q)``: the bottleneck altitude, min over 2D column paths to the goal of the largest ``zlo``
+  on the way (every 3D path is over a column path and is at altitude >= zlo in each column).
+- For a few levels ``T`` (``T >= 2``, ``zlo(goal column) < T``): ``Ω_T = {q: R(q) < T}``
+  (where the goal is reachable below ``T``) and ``dW_T(q)``, the 2D octile distance [cells] from
+  ``q`` to the columns outside ``Ω_T`` next to it (where a path enters ``Ω_T`` from, at altitude
+  ``>= T``).
+
+**The bound.** Split every edge's cost into a horizontal credit ``res h π̄`` and the rest. Over a
+path the horizontal credits sum to at least ``D2`` and the rest to at least the vertical credits
+(``P`` per layer crossed: for a vertical move the rest is ``res c̄ >= P``; for a climbing diagonal
+``π̄ <= (√2-1) c̄``, so the rest is ``>= res c̄ (len - (√2-1) h) >= res c̄``). A path from
+``a = (q, z)`` must reach altitude ``>= R(q)``, so
+
+  ``hA(a) = D2(q) + 2 S(H) - S(z) - S(zg)``,  ``H = max(R(q), z, zg)``.
+
+For a cell in the air (``z >= 2``) outside ``Ω_T`` every path either (L) comes down to layer
+``<= 1`` before it enters ``Ω_T``, then climbs again to ``>= T``, or (F) stays in the air until it
+enters ``Ω_T``, which is at least ``dW_T(q)`` cells away horizontally and ``|z - T|`` layers
+away vertically. In the air ``c̄ >= mf`` and ``π̄ <= (√2-1) mf``, so a move's rest is at least
+``res mf (len - (√2-1) h)``, which is ``>= res mf (a h + b v)`` for ``(a, b) = (2-√2, √3-√2)``
+and ``((√3+√2-3)/(√2-1), 1-a)`` (checked on the five move shapes). Hence
+
+  ``hL = D2 + S(z) - 2 S(1) + 2 S(max(T, zg)) - S(zg)``,
+  ``hF = max(hA, D2 + res mf max_(a,b) (a dW_T + b |z - T|) + S(T) - S(zg))``,
+  ``h_T = min(hL, hF)`` there, ``hA`` elsewhere; ``h = max(octile bound, hA, max_T h_T)``.
+
+*Admissible*: each term is a lower bound of every path (of its class). *Consistent*: for one
+move ``a -> b`` of cost ``e``, ``D2(q) - D2(q') <= res h π̄`` (Dijkstra's triangle inequality),
+``S`` terms change by at most the vertical credit (``R(q) <= max(zlo(q), R(q'))`` and
+``z >= zlo(q)``; see :func:`planner.astar.astar`), ``dW_T`` and ``|z - T|`` are 1-Lipschitz, so
+each of ``hA``, ``hL``, the second term of ``hF`` drops by at most its share of ``e``; a move that
+leaves the region ``{z >= 2, q ∉ Ω_T}`` starts next to ``Ω_T`` (``dW_T = 0``, so ``hF = hA``) or
+goes down to layer 1 (``hL`` drops by ``P(1)`` at most). A min or max of consistent functions is
+consistent. ``tests/test_heuristic.py`` checks ``h(a) <= e + h(b)`` on every edge and
+``h <= true cost-to-go`` on random and structured grids.
+
+The search multiplies ``h`` by ``1 - 1e-9`` (still consistent) as a margin for rounding.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from numba import njit
+
+__all__ = ["LayerHeuristic", "build_layer_heuristic", "heuristic_field", "MAX_LEVELS"]
+
+MAX_LEVELS = 3
+_S2M1 = math.sqrt(2.0) - 1.0
+# (a, b) pairs with a h + b v <= len - (√2-1) h for all five move shapes (h, v), shrunk by 1e-9.
+_A1 = (2.0 - math.sqrt(2.0)) * (1 - 1e-9)
+_B1 = (math.sqrt(3.0) - math.sqrt(2.0)) * (1 - 1e-9)
+_A2 = (math.sqrt(3.0) + math.sqrt(2.0) - 3.0) / _S2M1 * (1 - 1e-9)
+_B2 = (1.0 - (math.sqrt(3.0) + math.sqrt(2.0) - 3.0) / _S2M1) * (1 - 1e-9)
+
+
+@dataclass(frozen=True)
+class LayerHeuristic:
+    """Per-goal tables of the layer-aware heuristic (columns flattened as ``i * ny + j``).
+
+    Attributes:
+        d2: float64 ``[nx*ny]`` 2D lower bound of the horizontal credits to the goal [cost·m].
+        rcol: int64 ``[nx*ny]`` bottleneck altitude ``R`` [layers]; ``nz`` when cut off in 2D.
+        levels: int64 ``[L]`` the altitudes ``T`` with a distance table (``L <= MAX_LEVELS``).
+        dw: float64 ``[L, nx*ny]`` octile distance [cells] to where a path enters ``Ω_T``.
+        s: float64 ``[nz]`` cumulative vertical credits ``S(k)`` [cost·m].
+        mfres: ``mf * resolution`` [cost·m per cell]; 0 when there is no flight layer.
+        zg: The goal's layer.
+    """
+
+    d2: np.ndarray
+    rcol: np.ndarray
+    levels: np.ndarray
+    dw: np.ndarray
+    s: np.ndarray
+    mfres: float
+    zg: int
+
+
+# --------------------------------------------------------------------------- per-grid scans
+
+
+@njit(cache=True)
+def _grid_scan(cost):
+    """One pass over the grid: layer minima ``mc[nz]``, and per column the lowest passable
+    layer ``zlo`` (``nz`` if none), the smallest cost ``mu``, the costs of layers 0, 1, 2 and the
+    smallest cost of layers ``>= 3`` (``low[4, nx*ny]``)."""
+    nx, ny, nz = cost.shape
+    mc = np.full(nz, np.inf)
+    zlo = np.full(nx * ny, nz, np.int64)
+    mu = np.full(nx * ny, np.inf)
+    low = np.full((4, nx * ny), np.inf)
+    for x in range(nx):
+        for y in range(ny):
+            col = x * ny + y
+            lo = nz
+            m = np.inf
+            m3 = np.inf
+            for z in range(nz):
+                c = cost[x, y, z]
+                if c < mc[z]:
+                    mc[z] = c
+                if c < m:
+                    m = c
+                if lo == nz and c < np.inf:
+                    lo = z
+                if z >= 3 and c < m3:
+                    m3 = c
+            zlo[col] = lo
+            mu[col] = m
+            for z in range(min(nz, 3)):
+                low[z, col] = cost[x, y, z]
+            low[3, col] = m3
+    return mc, zlo, mu, low
+
+
+def _column_price(mc: np.ndarray, mu: np.ndarray, low: np.ndarray, mf: float) -> np.ndarray:
+    """The 2D price ``π = min(μ, (√2-1) λ, (√2-1) mf)`` per column, where
+    ``λ = min_k (c_k + adj_k) / 2`` over the column's cells, ``adj_k`` the cheapest layer next to
+    ``k``; for ``k >= 3`` ``c_k >= low[3]`` and ``adj_k >= min(mc[2:])``, a lower bound of ``λ``."""
+    nz = mc.size
+    inf = np.inf
+    adj = [min(mc[k - 1] if k > 0 else inf, mc[k + 1] if k + 1 < nz else inf) for k in range(min(nz, 3))]
+    lam = np.full(mu.shape, inf)
+    with np.errstate(invalid="ignore"):
+        for k in range(min(nz, 3)):
+            lam = np.minimum(lam, 0.5 * (low[k] + adj[k]))
+        if nz > 3:
+            lam = np.minimum(lam, 0.5 * (low[3] + float(mc[2:].min())))
+    price = np.minimum(mu, _S2M1 * lam)
+    if math.isfinite(mf):
+        price = np.minimum(price, _S2M1 * mf)
+    price[~np.isfinite(mu)] = inf
+    return np.ascontiguousarray(price)
+
+
+# --------------------------------------------------------------------------- 2D searches
+
+
+@njit(cache=True, inline="always")
+def _push(hk, hv, n, key, val):
+    i = n
+    while i > 0:
+        p = (i - 1) >> 1
+        if hk[p] <= key:
+            break
+        hk[i] = hk[p]
+        hv[i] = hv[p]
+        i = p
+    hk[i] = key
+    hv[i] = val
+
+
+@njit(cache=True, inline="always")
+def _pop(hk, hv, n):
+    """Remove the root of a heap of size ``n`` (the caller reads it first)."""
+    n -= 1
+    key = hk[n]
+    val = hv[n]
+    i = 0
+    while True:
+        c = 2 * i + 1
+        if c >= n:
+            break
+        if c + 1 < n and hk[c + 1] < hk[c]:
+            c += 1
+        if hk[c] < key:
+            hk[i] = hk[c]
+            hv[i] = hv[c]
+            i = c
+        else:
+            break
+    if n > 0:
+        hk[i] = key
+        hv[i] = val
+
+
+@njit(cache=True)
+def _dijkstra2d(price, nx, ny, g, res):
+    """8-connected 2D Dijkstra from column ``g``: edge ``res * h * (π(q) + π(q')) / 2``."""
+    n_cols = nx * ny
+    d = np.full(n_cols, np.inf)
+    done = np.zeros(n_cols, np.bool_)
+    cap = 8 * n_cols + 1
+    hk = np.empty(cap)
+    hv = np.empty(cap, np.int64)
+    d[g] = 0.0
+    hk[0] = 0.0
+    hv[0] = g
+    n = 1
+    sq2 = math.sqrt(2.0)
+    while n > 0:
+        du = hk[0]
+        u = hv[0]
+        _pop(hk, hv, n)
+        n -= 1
+        if done[u]:
+            continue
+        done[u] = True
+        ux = u // ny
+        uy = u % ny
+        pu = price[u]
+        for dx in range(-1, 2):
+            vx = ux + dx
+            if vx < 0 or vx >= nx:
+                continue
+            for dy in range(-1, 2):
+                vy = uy + dy
+                if (dx == 0 and dy == 0) or vy < 0 or vy >= ny:
+                    continue
+                v = vx * ny + vy
+                pv = price[v]
+                if pv == np.inf or done[v]:
+                    continue
+                step = res if (dx == 0 or dy == 0) else res * sq2
+                nd = du + step * 0.5 * (pu + pv)
+                if nd < d[v]:
+                    d[v] = nd
+                    _push(hk, hv, n, nd, v)
+                    n += 1
+    return d
+
+
+@njit(cache=True)
+def _bottleneck(zlo, nx, ny, nz, g):
+    """Minimax over 8-connected column paths from ``g`` of ``zlo`` (``nz`` when cut off):
+    a bucket queue, since the values are layer indices."""
+    n_cols = nx * ny
+    r = np.full(n_cols, nz, np.int64)
+    if zlo[g] >= nz:
+        return r
+    # buckets as linked stacks
+    head = np.full(nz, -1, np.int64)
+    nxt = np.empty(9 * n_cols + 1, np.int64)
+    item = np.empty(9 * n_cols + 1, np.int64)
+    m = 0
+    r[g] = zlo[g]
+    item[m] = g
+    nxt[m] = head[r[g]]
+    head[r[g]] = m
+    m += 1
+    done = np.zeros(n_cols, np.bool_)
+    for lev in range(nz):
+        while head[lev] >= 0:
+            e = head[lev]
+            head[lev] = nxt[e]
+            u = item[e]
+            if done[u] or r[u] != lev:
+                continue
+            done[u] = True
+            ux = u // ny
+            uy = u % ny
+            for dx in range(-1, 2):
+                vx = ux + dx
+                if vx < 0 or vx >= nx:
+                    continue
+                for dy in range(-1, 2):
+                    vy = uy + dy
+                    if (dx == 0 and dy == 0) or vy < 0 or vy >= ny:
+                        continue
+                    v = vx * ny + vy
+                    zv = zlo[v]
+                    if zv >= nz or done[v]:
+                        continue
+                    nr = lev if zv < lev else zv
+                    if nr < r[v]:
+                        r[v] = nr
+                        item[m] = v
+                        nxt[m] = head[nr]
+                        head[nr] = m
+                        m += 1
+    return r
+
+
+@njit(cache=True)
+def _entry_distance(rcol, nx, ny, t):
+    """Octile distance [cells] from each column to the nearest column with ``R >= t`` that
+    touches one with ``R < t`` (two-pass chamfer with weights 1 and √2, exact in the plane)."""
+    sq2 = math.sqrt(2.0)
+    d = np.full((nx, ny), np.inf)
+    for x in range(nx):
+        for y in range(ny):
+            if rcol[x * ny + y] < t:
+                continue
+            edge = False
+            for dx in range(-1, 2):
+                for dy in range(-1, 2):
+                    vx = x + dx
+                    vy = y + dy
+                    if 0 <= vx < nx and 0 <= vy < ny and rcol[vx * ny + vy] < t:
+                        edge = True
+            if edge:
+                d[x, y] = 0.0
+    for x in range(nx):
+        for y in range(ny):
+            v = d[x, y]
+            if x > 0:
+                v = min(v, d[x - 1, y] + 1.0)
+                if y > 0:
+                    v = min(v, d[x - 1, y - 1] + sq2)
+                if y + 1 < ny:
+                    v = min(v, d[x - 1, y + 1] + sq2)
+            if y > 0:
+                v = min(v, d[x, y - 1] + 1.0)
+            d[x, y] = v
+    for x in range(nx - 1, -1, -1):
+        for y in range(ny - 1, -1, -1):
+            v = d[x, y]
+            if x + 1 < nx:
+                v = min(v, d[x + 1, y] + 1.0)
+                if y > 0:
+                    v = min(v, d[x + 1, y - 1] + sq2)
+                if y + 1 < ny:
+                    v = min(v, d[x + 1, y + 1] + sq2)
+            if y + 1 < ny:
+                v = min(v, d[x, y + 1] + 1.0)
+            d[x, y] = v
+    return d.reshape(-1)
+
+
+# --------------------------------------------------------------------------- build / evaluate
+
+
+def _pick_levels(rcol: np.ndarray, zlo: np.ndarray, nz: int, zgc: int) -> np.ndarray:
+    """The (at most ``MAX_LEVELS``) bottleneck altitudes that constrain the most columns:
+    ``R(q) > zlo(q)`` (the column itself is not the bottleneck), ``R >= 2``, ``R > zlo(goal col)``."""
+    ok = (rcol < nz) & (rcol > zlo) & (rcol >= 2) & (rcol > zgc)
+    if not ok.any():
+        return np.zeros(0, np.int64)
+    counts = np.bincount(rcol[ok], minlength=nz)
+    order = np.argsort(-counts, kind="stable")
+    lv = [int(t) for t in order[:MAX_LEVELS] if counts[t] > 0]
+    return np.array(sorted(lv), dtype=np.int64)
+
+
+def build_layer_heuristic(cost: np.ndarray, goal: tuple[int, int, int], resolution: float) -> LayerHeuristic:
+    """Tables of the layer-aware heuristic for ``goal`` on ``cost`` (C-contiguous float64,
+    validated by the caller): two passes over the grid, then O(nx * ny) work per level."""
+    nx, ny, nz = cost.shape
+    res = float(resolution)
+    mc, zlo, mu, low = _grid_scan(cost)
+    fl = mc[2:]
+    fl = fl[np.isfinite(fl)]
+    mf = float(fl.min()) if fl.size else math.inf
+    price = _column_price(mc, mu, low, mf)
+    g = goal[0] * ny + goal[1]
+    d2 = _dijkstra2d(price, nx, ny, g, res)
+    rcol = _bottleneck(zlo, nx, ny, nz, g)
+    pv = np.where(np.isfinite(mc[:-1]) & np.isfinite(mc[1:]), 0.5 * res * (mc[:-1] + mc[1:]), 0.0)
+    s = np.concatenate(([0.0], np.cumsum(pv)))
+    levels = _pick_levels(rcol, zlo, nz, int(zlo[g])) if math.isfinite(mf) else np.zeros(0, np.int64)
+    dw = np.empty((len(levels), nx * ny))
+    for i, t in enumerate(levels):
+        dw[i] = _entry_distance(rcol, nx, ny, int(t))
+    return LayerHeuristic(d2, rcol, levels, dw, s, mf * res if math.isfinite(mf) else 0.0, int(goal[2]))
+
+
+@njit(cache=True, inline="always")
+def layer_h(vx, vy, vz, ny, d2, rcol, levels, dw, s, mfres, zg):
+    """The layer-aware bound ``max(hA, max_T h_T)`` of cell ``(vx, vy, vz)`` (see the module)."""
+    col = vx * ny + vy
+    d = d2[col]
+    if d == np.inf:
+        return np.inf
+    r = rcol[col]
+    hh = r
+    if vz > hh:
+        hh = vz
+    if zg > hh:
+        hh = zg
+    sz = s[vz]
+    szg = s[zg]
+    best = d + 2.0 * s[hh] - sz - szg
+    if vz >= 2:
+        ha = best
+        for i in range(levels.size):
+            t = levels[i]
+            if r < t:
+                continue
+            tg = t if t > zg else zg
+            hl = d + sz - 2.0 * s[1] + 2.0 * s[tg] - szg
+            w = dw[i, col]
+            dv = vz - t if vz > t else t - vz
+            c1 = _A1 * w + _B1 * dv
+            c2 = _A2 * w + _B2 * dv
+            if c2 > c1:
+                c1 = c2
+            hf = d + mfres * c1 + s[t] - szg
+            if ha > hf:
+                hf = ha
+            v = hl if hl < hf else hf
+            if v > best:
+                best = v
+    return best
+
+
+def heuristic_field(cost: np.ndarray, goal: tuple[int, int, int], resolution: float,
+                    min_cost: float | None = None) -> np.ndarray:
+    """The full heuristic ``h`` [cost·m] (octile bound included, before the 1e-9 margin) of
+    every cell for ``goal``: ``[nx, ny, nz]``; for tests and plots (the search evaluates it
+    lazily per cell)."""
+    arr = np.ascontiguousarray(cost, dtype=np.float64)
+    lh = build_layer_heuristic(arr, goal, resolution)
+    mc = float(arr.min()) if min_cost is None else float(min_cost)
+    return _field(arr.shape[0], arr.shape[1], arr.shape[2], goal[0], goal[1], goal[2], mc * resolution,
+                  lh.d2, lh.rcol, lh.levels, lh.dw, lh.s, lh.mfres, lh.zg)
+
+
+@njit(cache=True)
+def _field(nx, ny, nz, tx, ty, tz, hscale, d2, rcol, levels, dw, s, mfres, zg):
+    out = np.empty((nx, ny, nz))
+    for x in range(nx):
+        for y in range(ny):
+            for z in range(nz):
+                a = abs(x - tx)
+                b = abs(y - ty)
+                c = abs(z - tz)
+                if a < b:
+                    a, b = b, a
+                if b < c:
+                    b, c = c, b
+                if a < b:
+                    a, b = b, a
+                ho = hscale * (a + 0.41421356237309515 * b + 0.31783724519578205 * c)
+                hl = layer_h(x, y, z, ny, d2, rcol, levels, dw, s, mfres, zg)
+                out[x, y, z] = ho if ho > hl else hl
+    return out
