@@ -231,7 +231,10 @@ def _extra_commands() -> list[Callable[[argparse._SubParsersAction], None]]:  # 
     from console.describe_cmd import add_describe_parser
     from pipeline.cli_commands import add_bench_parser, add_calibrate_parser, add_map_parser
 
-    return [add_console_parser, add_map_parser, add_bench_parser, add_describe_parser, add_calibrate_parser]
+    from console.replay_cmd import add_replay_parser
+
+    return [add_console_parser, add_map_parser, add_bench_parser, add_describe_parser, add_calibrate_parser,
+            add_replay_parser]
 
 
 def main(argv: Sequence[str] | None = None) -> int:

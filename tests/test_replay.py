@@ -1,0 +1,134 @@
+"""``morphonavi replay``: a recorded short mission (simulated robot) shown again, read-only, at any time.
+
+The recording is made by a real console run (:func:`test_recording.run_short_mission`); the replay
+console's session and views must show the state the recording holds at the chosen time.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import shutil
+from pathlib import Path
+from typing import Any
+
+import pytest
+from mcap.reader import make_reader
+from mcap.writer import Writer
+
+from console.app import wait_until
+from console.cli import CliError, main
+from console.replay import Recording, ReplayError
+from console.replay_cmd import open_replay
+from console.session import SessionError
+from test_recording import read_all, run_short_mission
+
+
+@pytest.fixture(scope="module")
+def recorded(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, Any]:
+    path, _snaps, session = run_short_mission(tmp_path_factory.mktemp("replay"))
+    return path, session
+
+
+@pytest.fixture()
+def replay(recorded: Any) -> Any:
+    app = open_replay(recorded[0], port=0)
+    try:
+        yield app
+    finally:
+        app.stop()
+
+
+def test_replay_restores_the_scene_at_a_captures_time(recorded: Any, replay: Any) -> None:
+    path, live = recorded
+    _, msgs = read_all(path)
+    cap_time, cap = next((m[2], m[3]) for m in msgs if m[0] == "/morphonavi/capture")
+    # the scene the capture made: the first map holding objects seen in it
+    made_time, made = next((m[2], m[3]) for m in msgs if m[0] == "/morphonavi/scene" and m[2] >= cap_time
+                           and any(o.get("source", {}).get("capture") == cap["id"] for o in m[3]["objects"]))
+    session = replay.session
+
+    replay.seek(0.0)  # before the capture: no photo, an empty map
+    assert session.capture is None and session.scene.objects == ()
+
+    replay.seek_time(made_time)
+    assert session.capture is not None and session.capture.id == cap["id"]
+    assert [o.id for o in session.scene.objects] == [o["id"] for o in made["objects"]]
+    for obj, rec in zip(session.scene.objects, made["objects"]):
+        assert obj.position == pytest.approx(tuple(rec["position"]), abs=1e-9)
+    assert session.grid.counts()["occupied"] > 0  # the grid is rebuilt from the recorded map
+    photo = session.capture.image
+    assert photo.shape == (cap["intrinsics"]["height"], cap["intrinsics"]["width"], 3)
+    # the views draw it: every object, the capture frustum, the robot twin
+    assert wait_until(lambda: replay.views["objects"].drawn_ids() == sorted(o.id for o in session.scene.objects), 20)
+    assert replay.views["capture"].has_frustum
+    # the robot is where the recording had it then
+    pose = [m for m in msgs if m[0] == "/robot/pose" and m[2] <= made_time][-1][3]
+    assert session.robot is not None
+    assert session.robot.pose.translation == pytest.approx((pose.pose.position.x, pose.pose.position.y,
+                                                             pose.pose.position.z), abs=1e-9)
+
+    replay.seek(replay.recording.duration)  # the end: the live session's last map, the mission done
+    assert {o.id for o in session.scene.objects} == {o.id for o in live.scene.objects}
+    assert session.run.state == "done"
+
+
+def test_replay_plays_to_the_end(recorded: Any, replay: Any) -> None:
+    path, _ = recorded
+    _, msgs = read_all(path)
+    replay.seek(0.0)
+    replay.play(speed=30.0)
+    assert wait_until(lambda: not replay.playing, 60), replay.time
+    assert replay.time == pytest.approx(replay.recording.duration)
+    t_pose, last_pose = [(m[2], m[3]) for m in msgs if m[0] == "/robot/pose"][-1]
+    t_state, last_state = [(m[2], m[3]) for m in msgs if m[0] == "/robot/state"][-1]
+    p = last_pose.pose.position  # the newer of the last pose and the last state (a change of mode)
+    expected = (p.x, p.y, p.z) if t_pose >= t_state else tuple(last_state["translation"])
+    robot = replay.session.robot
+    assert robot is not None and math.dist(robot.pose.translation, expected) < 1e-9
+    assert robot.mode == last_state["mode"]
+    assert replay.session.route_snapshot().registered == ()  # the flown route was retired, as live
+    assert replay.session.run.state == "done"
+
+
+def test_replay_is_read_only(replay: Any) -> None:
+    session = replay.session
+    replay.seek(replay.recording.duration / 2)
+    res = session.add_goal((2.5, 2.0, 0.0))
+    assert not res.ok and "read-only" in res.message
+    for call in (session.register, session.build_mission, session.clear_route, lambda: session.delete_object("x"),
+                 lambda: session.save("snap"), session.undo_edit):
+        with pytest.raises(SessionError, match="read-only"):
+            call()
+
+
+def test_bad_files_are_refused_with_exit_code_2(recorded: Any, tmp_path: Path, capsys: Any) -> None:
+    path, _ = recorded
+    truncated = tmp_path / "truncated.mcap"
+    truncated.write_bytes(path.read_bytes()[: path.stat().st_size // 2])
+    not_mcap = tmp_path / "photo.mcap"
+    not_mcap.write_bytes(b"\xff\xd8\xff\xe0 not an mcap file")
+    foreign = tmp_path / "foreign.mcap"
+    with open(foreign, "wb") as f:
+        w = Writer(f)
+        w.start("", "test")
+        sid = w.register_schema("x", "jsonschema", b"{}")
+        cid = w.register_channel("/other", "json", sid)
+        w.add_message(cid, log_time=1, data=json.dumps({"a": 1}).encode(), publish_time=1)
+        w.finish()
+    cases = {tmp_path / "missing.mcap": "no such file", truncated: "truncated", not_mcap: "not an MCAP file",
+             foreign: "not a MorphoNavi recording", tmp_path: "not a file"}
+    for bad, why in cases.items():
+        assert main(["replay", str(bad), "--port", "0"]) == 2
+        err = capsys.readouterr().err
+        assert err.startswith("morphonavi replay: error: ") and why in err and "Traceback" not in err, err
+        with pytest.raises(ReplayError, match=why):
+            Recording(bad)
+        with pytest.raises(CliError):
+            open_replay(bad, port=0)
+    # a copy of the good file opens
+    good = tmp_path / "good.mcap"
+    shutil.copy(path, good)
+    assert Recording(good).count("/morphonavi/capture") == 1
+    with open(good, "rb") as f:
+        assert make_reader(f).get_summary() is not None
