@@ -155,6 +155,7 @@ class SceneSummaryView:
         if oid is None:
             return
         threading.Thread(target=self.go_to, args=(oid, event.client), daemon=True).start()
+        self._goto.value = PLACEHOLDER  # ready for the next choice (the same object again, too)
 
     def go_to(self, object_id: str, client: Any = None) -> bool:
         """Plan a candidate to the floor beside ``object_id``; tell ``client`` how it went."""

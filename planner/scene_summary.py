@@ -128,9 +128,10 @@ def summarize(graph: dict[str, Any]) -> str:
     names = _names(graph)
     lines = []
     robot = graph.get("robot")
-    head = f"Scene (world frame, metres): {len(objs)} object(s)"
+    head = f"Scene (world frame, metres): {len(objs)} object{'' if len(objs) == 1 else 's'}"
     if graph["groups"]:
-        head += f", {len(graph['groups'])} group(s)"
+        n = len(graph["groups"])
+        head += f", {n} group{'' if n == 1 else 's'}"
     if robot:
         p = robot["position"]
         head += f". Robot at ({p[0]:.2f}, {p[1]:.2f}, {p[2]:.2f}) heading {robot['yaw_deg']:.0f}° (world, from +x)"
@@ -162,7 +163,8 @@ def summarize(graph: dict[str, Any]) -> str:
         for g in graph["groups"][:MAX_GROUP_LINES]:
             lines.append(_group_line(g, graph, names))
         if len(graph["groups"]) > MAX_GROUP_LINES:
-            lines.append(f"- and {len(graph['groups']) - MAX_GROUP_LINES} more group(s).")
+            more = len(graph["groups"]) - MAX_GROUP_LINES
+            lines.append(f"- and {more} more group{'' if more == 1 else 's'}.")
     unc = graph["uncertainties"]
     if unc:
         lines.append("Uncertain:")
