@@ -51,8 +51,9 @@ import numpy as np
 from pipeline.scene import Scene, SceneObject
 
 from .grid import PlanningGrid
-from .object_goal import Reachability, footprint, footprint_distance
+from .object_goal import Reachability, footprint
 from .route import Route
+from .view_geometry import RobotView, overlap_fraction, polygon_gap
 
 GRAPH_SCHEMA_VERSION = 1
 SUPPORT_TOL = 0.10  # [m]
@@ -103,52 +104,6 @@ def direction(bearing: float) -> str:
     return SECTORS[int(((deg + 22.5) % 360.0) // 45.0)]
 
 
-def _wrap(a: np.ndarray | float) -> Any:
-    return (np.asarray(a) + np.pi) % (2 * np.pi) - np.pi
-
-
-def _polygon_gap(a: np.ndarray, b: np.ndarray) -> float:
-    """Distance [m] between two convex polygons ``[n, 2]`` (0 when they overlap)."""
-    def inside(pts: np.ndarray, poly: np.ndarray) -> np.ndarray:
-        e = np.roll(poly, -1, axis=0) - poly  # [m, 2]
-        r = pts[:, None, :] - poly[None, :, :]  # [n, m, 2]
-        cross = e[None, :, 0] * r[:, :, 1] - e[None, :, 1] * r[:, :, 0]
-        return np.all(cross >= -1e-12, axis=1) | np.all(cross <= 1e-12, axis=1)
-
-    def seg_dist(pts: np.ndarray, poly: np.ndarray) -> float:
-        s0 = poly
-        d = np.roll(poly, -1, axis=0) - poly  # [m, 2]
-        r = pts[:, None, :] - s0[None, :, :]  # [n, m, 2]
-        t = np.clip(np.einsum("nmk,mk->nm", r, d) / np.maximum(np.einsum("mk,mk->m", d, d), 1e-18), 0.0, 1.0)
-        return float(np.min(np.linalg.norm(r - t[:, :, None] * d[None, :, :], axis=2)))
-
-    if inside(a, b).any() or inside(b, a).any():
-        return 0.0
-    for i in range(len(a)):  # edges crossing with no vertex inside (a plus shape)
-        for j in range(len(b)):
-            if _segments_cross(a[i], a[(i + 1) % len(a)], b[j], b[(j + 1) % len(b)]):
-                return 0.0
-    return min(seg_dist(a, b), seg_dist(b, a))
-
-
-def _segments_cross(p1: np.ndarray, p2: np.ndarray, q1: np.ndarray, q2: np.ndarray) -> bool:
-    def orient(a: np.ndarray, b: np.ndarray, c: np.ndarray) -> float:
-        return float((b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]))
-    d1, d2 = orient(q1, q2, p1), orient(q1, q2, p2)
-    d3, d4 = orient(p1, p2, q1), orient(p1, p2, q2)
-    return d1 * d2 < 0 and d3 * d4 < 0
-
-
-def _overlap_area(a: SceneObject, b: SceneObject, samples: int = 9) -> float:
-    """Fraction of ``a``'s footprint inside ``b``'s (sampled on a ``samples`` x ``samples`` grid)."""
-    w, _, l = a.size
-    c, s = math.cos(a.yaw), math.sin(a.yaw)
-    u = (np.arange(samples) + 0.5) / samples - 0.5
-    uu, vv = np.meshgrid(u * l, u * w, indexing="ij")
-    xy = np.stack([a.position[0] + c * uu - s * vv, a.position[1] + s * uu + c * vv], axis=-1).reshape(-1, 2)
-    return float(np.mean(footprint_distance(b, xy) <= 1e-9))
-
-
 def position_sigma(o: SceneObject) -> float | None:
     """Horizontal 1-sigma position error [m] of a mapped object: the inverse-variance fusion of
     its used sightings' larger horizontal sigma (ray directions ignored); ``None`` without history."""
@@ -176,70 +131,6 @@ def _r(v: float, nd: int = 3) -> float:
     return round(float(v), nd)
 
 
-class _View:
-    """Bearing intervals and distances of objects from the robot."""
-
-    def __init__(self, objs: Sequence[SceneObject], robot: RobotPose) -> None:
-        x, y, _, yaw = robot
-        self.lo = np.zeros(len(objs))
-        self.hi = np.zeros(len(objs))
-        self.centre = np.zeros(len(objs))
-        self.near = np.zeros(len(objs))
-        self.bearing = np.zeros(len(objs))
-        self.contains = np.zeros(len(objs), dtype=bool)
-        for n, o in enumerate(objs):
-            corners = footprint(o) - (x, y)
-            ang = _wrap(np.arctan2(corners[:, 1], corners[:, 0]) - yaw)
-            b = float(_wrap(math.atan2(o.position[1] - y, o.position[0] - x) - yaw))
-            rel = _wrap(ang - b)  # corners relative to the centre's bearing: no wrap-around
-            self.lo[n], self.hi[n] = b + rel.min(), b + rel.max()
-            self.bearing[n] = b
-            self.centre[n] = math.hypot(o.position[0] - x, o.position[1] - y)
-            self.near[n] = float(footprint_distance(o, np.array([[x, y]]))[0])
-            self.contains[n] = self.near[n] <= 0.0 or self.hi[n] - self.lo[n] >= math.pi
-
-    def _shifted(self, a: int, b: int) -> tuple[float, float]:
-        """``b``'s bearing interval moved by whole turns next to ``a``'s."""
-        shift = 2 * math.pi * round((self.bearing[b] - self.bearing[a]) / (2 * math.pi))
-        return self.lo[b] - shift, self.hi[b] - shift
-
-    def overlap(self, a: int, b: int) -> float:
-        """Overlap of the bearing intervals as a fraction of the narrower one."""
-        blo, bhi = self._shifted(a, b)
-        lo, hi = max(self.lo[a], blo), min(self.hi[a], bhi)
-        narrow = max(min(self.hi[a] - self.lo[a], bhi - blo), 1e-9)
-        return max(0.0, hi - lo) / narrow
-
-    def behind(self, a: int, b: int) -> bool:
-        """Whether object ``a`` is behind object ``b`` as seen from the robot."""
-        if self.contains[a] or self.contains[b]:
-            return False
-        return (self.centre[a] - self.centre[b] >= BEHIND_DEPTH and self.near[a] > self.near[b]
-                and self.overlap(a, b) >= BEHIND_OVERLAP)
-
-    def left_of(self, a: int, b: int) -> bool:
-        """Whether ``a``'s bearing interval lies wholly to the left of ``b``'s."""
-        if self.contains[a] or self.contains[b]:
-            return False
-        return self.lo[a] > self._shifted(a, b)[1]
-
-    def hidden_fraction(self, a: int, coverers: Sequence[int]) -> float:
-        iv = []
-        for b in coverers:
-            blo, bhi = self._shifted(a, b)
-            lo, hi = max(self.lo[a], blo), min(self.hi[a], bhi)
-            if hi > lo:
-                iv.append((lo, hi))
-        iv.sort()
-        covered, end = 0.0, -math.inf
-        for lo, hi in iv:
-            lo = max(lo, end)
-            if hi > lo:
-                covered += hi - lo
-                end = hi
-        return covered / max(self.hi[a] - self.lo[a], 1e-9)
-
-
 def _support(objs: Sequence[SceneObject], floor: float) -> list[tuple[str | None, float]]:
     """For each object: ``("floor" | id | None, gap [m])``."""
     out: list[tuple[str | None, float]] = []
@@ -252,7 +143,7 @@ def _support(objs: Sequence[SceneObject], floor: float) -> list[tuple[str | None
         for b in objs:
             if b is a or abs(_top(b) - bot) > SUPPORT_TOL:
                 continue
-            frac = _overlap_area(a, b)
+            frac = overlap_fraction(a, b)
             if frac >= SUPPORT_OVERLAP:
                 key = (_top(b), frac, b.id)
                 if best is None or key[:2] > best[:2]:
@@ -371,7 +262,7 @@ def build_scene_graph(scene: Scene, robot: Sequence[float] | None = None, grid: 
             rb = math.hypot(objs[b].size[0], objs[b].size[2]) / 2
             if math.dist(objs[a].position[:2], objs[b].position[:2]) - ra - rb > max(NEXT_TO_GAP, SIDE_GAP, GROUP_GAP):
                 continue
-            gaps[(a, b)] = _polygon_gap(feet[a], feet[b])
+            gaps[(a, b)] = polygon_gap(feet[a], feet[b])
     groups = _groups(objs, gaps, support, grid)
     group_of = {m: g["id"] for g in groups for m in g["members"]}
     rel: set[tuple[str, str, str]] = set()
@@ -398,7 +289,7 @@ def build_scene_graph(scene: Scene, robot: Sequence[float] | None = None, grid: 
         x, y = sorted((a, b), key=lambda k: group_of.get(objs[k].id, objs[k].id))
         add(x, "next_to", y)
     records: list[dict[str, Any]] = []
-    view = _View(objs, pose) if pose is not None else None
+    view = RobotView(objs, pose, BEHIND_DEPTH, BEHIND_OVERLAP) if pose is not None else None
     reach = Reachability(grid, pose[:3], route, objs) if (pose is not None and grid is not None) else None
     if view is not None:
         for a in range(n):

@@ -302,3 +302,18 @@ def test_map_uncertainties_are_stated() -> None:
     pinned = _graph([replace(vague, pinned=True)])
     assert not any("position uncertain" in t for t in _o(pinned, "chair")["uncertain"])
     assert "Uncertain:" in summarize(g) and "chair: low detector score 0.30" in summarize(g)
+
+
+def test_polygon_gap_between_footprints() -> None:
+    from planner.object_goal import footprint
+    from planner.view_geometry import polygon_gap
+
+    a = footprint(_obj("a", "x", 0.0, 0.0, (1.0, 1.0, 1.0)))  # unit square at the origin
+    assert polygon_gap(a, footprint(_obj("b", "x", 2.0, 0.0, (1.0, 1.0, 1.0)))) == pytest.approx(1.0)
+    assert polygon_gap(a, footprint(_obj("c", "x", 2.0, 2.0, (1.0, 1.0, 1.0)))) == pytest.approx(math.sqrt(2))
+    assert polygon_gap(a, footprint(_obj("d", "x", 1.0, 0.0, (1.0, 1.0, 1.0)))) == 0.0  # touching
+    plus = footprint(_obj("e", "x", 0.0, 0.0, (0.2, 1.0, 3.0)))  # a long thin bar across: no corner inside
+    thin = footprint(_obj("f", "x", 0.0, 0.0, (3.0, 1.0, 0.2)))
+    assert polygon_gap(plus, thin) == 0.0
+    turned = footprint(_obj("g", "x", 2.0, 0.0, (1.0, 1.0, 1.0), yaw=math.pi / 4))  # a corner points at a
+    assert polygon_gap(a, turned) == pytest.approx(1.5 - math.sqrt(0.5))
