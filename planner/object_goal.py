@@ -18,7 +18,8 @@ Reachability from a start point, with the Aerial-Ground A*'s own rules:
 
 - ``walk``: an approach cell lies in the start's ground component (ground cells joined through
   faces; with ``no_corner_cutting`` a diagonal move needs both cells it sweeps past passable, so
-  face-connectivity is exactly what the A* can walk);
+  face-connectivity is exactly what the A* can walk). A robot in the air counts from the floor
+  cell under it (it can come down there, or fly on);
 - ``fly``: no approach cell can be walked to, but one lies in the start's 3D component of
   passable cells (the robot takes off, flies over and lands on free floor, then walks). The
   approach cell is then a *landing spot*: free floor (not within the margin of an obstacle)
@@ -173,7 +174,7 @@ class Reachability:
             return
         lab3, _ = ndimage.label(passable, ndimage.generate_binary_structure(3, conn or 3))
         self._all = lab3 == lab3[s_cell]
-        if s_cell[2] == 0:
+        if self._ground_ok[s_cell[0], s_cell[1]]:  # on the floor, or in the air above passable floor
             lab2, _ = ndimage.label(self._ground_ok, ndimage.generate_binary_structure(2, conn or 2))
             self._walk = lab2 == lab2[s_cell[0], s_cell[1]]
         if passable.shape[2] > 1:  # free floor with a passable take-off cell above, joined to the robot

@@ -317,3 +317,14 @@ def test_polygon_gap_between_footprints() -> None:
     assert polygon_gap(plus, thin) == 0.0
     turned = footprint(_obj("g", "x", 2.0, 0.0, (1.0, 1.0, 1.0), yaw=math.pi / 4))  # a corner points at a
     assert polygon_gap(a, turned) == pytest.approx(1.5 - math.sqrt(0.5))
+
+
+def test_a_robot_in_the_air_counts_from_the_floor_under_it() -> None:
+    objs = _line_and_dog()
+    grid = build_grid(Scene(objects=tuple(objs)))
+    dog = objs[-1]
+    assert Reachability(grid, (2.5, 1.0, 1.5), objects=objs).approach(dog).mode == "walk"  # above open floor
+    wall = [_obj(f"w{n}", "cardboard_box", 0.25 + 0.5 * n, 3.0, (0.5, 1.2, 0.5)) for n in range(10)]  # wall to wall
+    g2 = build_grid(Scene(objects=tuple(wall + [dog])))
+    app = Reachability(g2, (2.5, 1.0, 1.5), objects=wall + [dog]).approach(dog)
+    assert app.mode == "fly" and app.planned == "walk+fly"
