@@ -90,6 +90,7 @@ class ConsoleConfig:
         failsafe_hold: Seconds of holding, link still lost, before the failsafe lands the robot.
         link_options: Extra keyword options for :func:`console.link.open_link` (e.g. a MAVLink
             ``config`` with the NED frame and the ground-motion command set).
+        record: Record the session as MCAP in ``<session>/recordings`` (:mod:`console.recording`).
     """
 
     robot: str = "sim"
@@ -105,6 +106,7 @@ class ConsoleConfig:
     failsafe_after: float = 3.0
     failsafe_hold: float = 5.0
     link_options: Mapping[str, Any] = field(default_factory=dict)
+    record: bool = True
 
 
 class ConsoleApp:
@@ -155,8 +157,9 @@ class ConsoleApp:
             restored = session.restore_last()
         from .recording import start_recording  # mission log (MCAP) in the session folder, closed last
 
-        self.recorder = start_recording(session)
-        self._closers.append(self.recorder.close)
+        self.recorder = start_recording(session) if cfg.record else None
+        if self.recorder is not None:
+            self._closers.append(self.recorder.close)
         perceiver = self._perceiver_override or self._choose_perceiver()
         self.mapping = MappingJob(session, self._take_photo, perceiver)
         self.runner = self._make_runner()
