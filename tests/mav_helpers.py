@@ -36,8 +36,21 @@ def vehicle(config: MavlinkConfig = CFG, faults: dict[str, Any] | None = None, w
                 link.latest_state()
         yield link, sim
     finally:
+        for m in [m for m in _managers if m.link is link]:
+            m.close()
+            _managers.remove(m)
         link.close()
         sim.stop()
+
+
+_managers: list[MissionManager] = []
+
+
+def mission_manager(link: MavlinkLink, **kw: Any) -> MissionManager:
+    """A MissionManager closed (mission aborted, worker joined) when its :func:`vehicle` ends."""
+    m = MissionManager(link, **kw)
+    _managers.append(m)
+    return m
 
 
 def eventually(check: Callable[[], Any], timeout: float = 5.0, poll: float = 0.02) -> bool:

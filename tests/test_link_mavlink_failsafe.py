@@ -10,8 +10,8 @@ import pytest
 from pymavlink import mavutil
 
 from console.link.base import CommandRejected, LinkError, RunStatus
-from console.link.manager import MissionManager, MissionStatus
-from mav_helpers import ORIGIN, config, eventually, events, vehicle
+from console.link.manager import MissionStatus
+from mav_helpers import ORIGIN, config, eventually, events, mission_manager, vehicle
 from planner.mission import Mission, MissionSegment, SegmentKind
 
 mav = mavutil.mavlink
@@ -39,7 +39,7 @@ def test_a_vehicle_heard_again_during_the_failsafe_hold_is_not_landed() -> None:
     see the link lost: the live age keeps it from landing; nothing flies it anywhere."""
     with vehicle(config(state_rate=2.0, fly_speed=1.0)) as (link, emu):
         _airborne(link)
-        manager = MissionManager(link, failsafe_after=0.8, failsafe_hold=2.0, poll=0.01)
+        manager = mission_manager(link, failsafe_after=0.8, failsafe_hold=2.0, poll=0.01)
         manager.start(_flight())
         assert eventually(lambda: emu.pos[0] > 1.0, 10.0)
         emu.frozen = True
@@ -78,7 +78,7 @@ def test_a_vehicle_heard_again_before_the_failsafe_landing_takes_effect_cancels_
     yet) when it is heard again: the landing is cancelled, the robot holds, the mission pauses."""
     with vehicle(config(retries=12, command_max_age=3.0, fly_speed=1.0)) as (link, emu):
         _airborne(link)
-        manager = MissionManager(link, failsafe_after=0.8, failsafe_hold=0.5)
+        manager = mission_manager(link, failsafe_after=0.8, failsafe_hold=0.5)
         manager.start(_flight())
         assert eventually(lambda: emu.pos[0] > 1.0, 10.0)
         emu.ignore_modes = {"LAND"}
@@ -117,7 +117,7 @@ def test_commands_queued_behind_a_blocked_link_are_not_resent_late_and_the_truth
                                                             "FS_EKF_ACTION": 1.0}}) as (link, emu):
         assert eventually(lambda: any("FS_GCS_ENABLE is 0" in w for w in link.latest_state().warnings))
         _airborne(link)
-        manager = MissionManager(link, failsafe_after=0.8, failsafe_hold=0.6)
+        manager = mission_manager(link, failsafe_after=0.8, failsafe_hold=0.6)
         manager.start(_flight())
         assert eventually(lambda: emu.pos[0] > 1.0, 10.0)
         handled = len(emu.record.received)
@@ -151,7 +151,7 @@ def test_the_configured_speed_is_commanded_and_a_hold_is_reported_once_still() -
     0.5 m/s, and reports 'held' only once the vehicle stands still."""
     with vehicle(config(fly_speed=0.5), **REAL) as (link, emu):
         _airborne(link)
-        manager = MissionManager(link, failsafe_after=1.5, failsafe_hold=0.5)
+        manager = mission_manager(link, failsafe_after=1.5, failsafe_hold=0.5)
         manager.start(_flight(6.0))
         assert eventually(lambda: emu.pos[0] > 0.8, 15.0)
         pressed = list(emu.pos)
@@ -185,7 +185,7 @@ def test_a_vehicle_refusing_the_speed_is_warned_about_and_the_hold_still_waits_f
 def test_a_landing_starts_only_when_the_vehicle_has_stopped_over_the_spot() -> None:
     """Fault 9: arriving fast, LAND at 0.15 m while moving touches down past the spot."""
     with vehicle(config(fly_speed=2.5), **REAL) as (link, emu):
-        manager = MissionManager(link, failsafe_after=1.5, failsafe_hold=0.5)
+        manager = mission_manager(link, failsafe_after=1.5, failsafe_hold=0.5)
         manager.start(Mission((MissionSegment(TAKEOFF, ((2.5, 0.7, 0.0), (2.5, 0.7, 1.5))),
                                MissionSegment(FLY, ((2.5, 0.7, 1.5), (2.5, 4.0, 1.5))),
                                MissionSegment(LAND, ((2.5, 4.0, 1.5), (2.5, 4.0, 0.0)))), **BOUNDS))
@@ -200,7 +200,7 @@ def test_a_landing_starts_only_when_the_vehicle_has_stopped_over_the_spot() -> N
 
 def test_a_segment_that_overruns_its_deadline_is_held_and_paused() -> None:
     with vehicle(faults={"freeze_motion": True}) as (link, emu):
-        manager = MissionManager(link, failsafe_after=1.5, failsafe_hold=0.5, watchdog_speeds=(2.0, 2.0, 2.0),
+        manager = mission_manager(link, failsafe_after=1.5, failsafe_hold=0.5, watchdog_speeds=(2.0, 2.0, 2.0),
                                  watchdog_factor=1.0, watchdog_slack=1.0)
         manager.start(Mission((MissionSegment(WALK, ((2.5, 0.7, 0.0), (2.5, 2.7, 0.0))),)))
         t0 = time.monotonic()

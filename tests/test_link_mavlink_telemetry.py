@@ -11,8 +11,8 @@ import pytest
 from pymavlink import mavutil
 
 from console.link.base import Mode, RunStatus
-from console.link.manager import MissionManager, MissionStatus
-from mav_helpers import ORIGIN, config, eventually, events, vehicle
+from console.link.manager import MissionStatus
+from mav_helpers import ORIGIN, config, eventually, events, mission_manager, vehicle
 from planner.mission import Mission, MissionSegment, SegmentKind
 
 mav = mavutil.mavlink
@@ -35,7 +35,7 @@ def test_nan_position_is_dropped_the_pose_goes_stale_and_the_walk_stops() -> Non
     """Fault 1: LOCAL_POSITION_NED x = y = NaN mid-walk. The NaN never becomes the pose, the health
     says why, the manager treats the stale pose as link loss and the robot is stopped."""
     with vehicle(config(ground=replace_ground(0.5)), walk_speed=0.5) as (link, emu):
-        manager = MissionManager(link, failsafe_after=1.0, failsafe_hold=0.4)
+        manager = mission_manager(link, failsafe_after=1.0, failsafe_hold=0.4)
         manager.start(_walk_mission())
         assert eventually(lambda: link.latest_state().position[1] > ORIGIN[1] + 0.3, 10.0)
         emu.corrupt = {"x": NAN, "y": NAN}
@@ -110,7 +110,7 @@ def test_telemetry_stopping_without_a_heartbeat_gap_is_link_loss() -> None:
     land where the robot is (no flight anywhere)."""
     with vehicle() as (link, emu):
         assert link.run_segment(MissionSegment(TAKEOFF, ((2.5, 0.7, 0.0), (2.5, 0.7, 1.5)))).wait(10) is RunStatus.DONE
-        manager = MissionManager(link, failsafe_after=1.0, failsafe_hold=0.5)
+        manager = mission_manager(link, failsafe_after=1.0, failsafe_hold=0.5)
         manager.start(Mission((MissionSegment(FLY, ((2.5, 0.7, 1.5), (2.5, 9.0, 1.5))),),
                               bounds_max=(10.0, 10.0, 3.0)))
         assert eventually(lambda: link.latest_state().position[1] > 2.0, 10.0)
@@ -135,12 +135,13 @@ def test_a_reboot_is_detected_streams_come_back_and_the_origin_change_is_warned(
     mission pauses with the reason."""
     with vehicle(config(ground=replace_ground(0.5)), walk_speed=0.5, reboot_silence=silence,
                  faults={"streams_need_request": True}) as (link, emu):
-        manager = MissionManager(link, failsafe_after=3.0, failsafe_hold=0.5)
+        manager = mission_manager(link, failsafe_after=3.0, failsafe_hold=0.5)
         manager.start(_walk_mission())
         assert eventually(lambda: link.latest_state().position[1] > ORIGIN[1] + 0.8, 10.0)
         requests = len(emu.record.intervals)
-        moved = math.hypot(emu.pos[0], emu.pos[1])
-        emu.reboot()
+        with emu.lock:  # the new origin is where it stands at the reboot
+            moved = math.hypot(emu.pos[0], emu.pos[1])
+            emu.reboot()
         assert manager.wait(10.0, until=[MissionStatus.PAUSED]) is MissionStatus.PAUSED, events(manager)
         assert eventually(lambda: link.latest_state().health == "ok", 5.0)  # streams requested again
         assert len(emu.record.intervals) > requests
@@ -148,9 +149,11 @@ def test_a_reboot_is_detected_streams_come_back_and_the_origin_change_is_warned(
         assert st.link_epoch >= 1
         assert eventually(lambda: any("EKF origin moved" in w for w in link.latest_state().warnings), 5.0)
         warning = next(w for w in link.latest_state().warnings if "EKF origin moved" in w)
-        assert f"moved {moved:.1f} m" in warning
+        assert float(warning.split("moved ")[1].split(" m")[0]) == pytest.approx(moved, abs=0.051), warning
         message = manager.progress().message
-        assert "reconnected or rebooted" in message or "link restored" in message, events(manager)
+        assert "walk: the robot reconnected or rebooted" in message and "robot held, mission paused" in message
+        why = "time_boot_ms went back" if silence < 1.0 else "heartbeat back after"
+        assert f"vehicle rebooted ({why}" in message or f"vehicle {why}" in message, message
         # the twin now shows the new-origin pose: at the NED origin again, and the operator was told
         assert link.latest_state().position[:2] == pytest.approx(ORIGIN[:2], abs=0.05)
 
@@ -219,7 +222,7 @@ def test_takeoff_waits_for_the_position_estimate_instead_of_failing() -> None:
     """Fault 10: Execute before the EKF has a position: the mission waits, then takes off."""
     with vehicle(faults={"ekf_ready": False}, wait_ok=False) as (link, emu):
         assert eventually(lambda: link.latest_state() is not None)
-        manager = MissionManager(link, failsafe_after=1.5, failsafe_hold=0.5)
+        manager = mission_manager(link, failsafe_after=1.5, failsafe_hold=0.5)
         manager.start(Mission((MissionSegment(TAKEOFF, ((2.5, 0.7, 0.0), (2.5, 0.7, 1.5))),
                                MissionSegment(LAND, ((2.5, 0.7, 1.5), (2.5, 0.7, 0.0))))))
         assert eventually(lambda: any("waiting for the robot's position" in m for m in events(manager)))
@@ -234,7 +237,7 @@ def test_takeoff_waits_for_the_position_estimate_instead_of_failing() -> None:
 def test_a_vehicle_that_never_gets_ready_pauses_the_mission_with_its_reasons() -> None:
     with vehicle(faults={"ekf_ready": False}, wait_ok=False) as (link, emu):
         assert eventually(lambda: link.latest_state() is not None and link.latest_state().readiness)
-        manager = MissionManager(link, failsafe_after=1.5, failsafe_hold=0.5, ready_timeout=1.0)
+        manager = mission_manager(link, failsafe_after=1.5, failsafe_hold=0.5, ready_timeout=1.0)
         manager.start(Mission((MissionSegment(TAKEOFF, ((2.5, 0.7, 0.0), (2.5, 0.7, 1.5))),)))
         assert manager.wait(10.0) is MissionStatus.PAUSED
         message = manager.progress().message

@@ -518,8 +518,8 @@ class MissionManager:
             if st.link_epoch != epoch and not self._link_lost():
                 if is_main:
                     self._resume_point = self._original_index(mission.segments[index], part, run.next_waypoint)
-                return self._stop_paused(run, f"{what}: the robot reconnected or rebooted ({st.health}"
-                                         + "".join(f"; {w}" for w in st.warnings) + ")")
+                return self._stop_paused(run, f"{what}: the robot reconnected or rebooted ("
+                                         + "; ".join((st.health,) + st.warnings) + ")")
             if time.monotonic() > deadline:
                 if is_main:
                     self._resume_point = self._original_index(mission.segments[index], part, run.next_waypoint)
@@ -622,7 +622,7 @@ class MissionManager:
         """Hold, wait ``failsafe_hold`` for the link, then land where the robot is; every decision
         reads the link's live age."""
         st = self.link.latest_state()
-        why = st.health if st is not None else "no robot state"
+        why = st.health if st is not None and not st.link_ok else "no fresh state from the robot"
         with self._cond:
             self._failsafe_acting = True
             self._told_back = False

@@ -81,7 +81,7 @@ class MavlinkLink(RobotLink):
         self.telemetry = Telemetry(config.source_system, config.heartbeat_timeout, config.autopilot_component,
                                    config.max_range, config.max_speed, on_epoch=self._on_epoch)
         self.transport = MavTransport(url, config.source_system, config.source_component, self.telemetry.handle,
-                                      tlog)
+                                      tlog, on_reconnect=self.telemetry.new_epoch)
         self.commander = Commander(self.transport, self.telemetry, config.ned, self._target, config.ack_timeout,
                                    config.retries, config.command_max_age, config.nack_window, self._counters)
         self.streams = StreamKeeper(config.message_rate, self.telemetry, self.transport, self.commander.command,

@@ -223,13 +223,20 @@ class Telemetry:
                     self.received += 1
                     epoch_reason = self._telemetry(kind, msg, now)
             if epoch_reason:
-                v.epoch += 1
-                v.epoch_reason = epoch_reason
+                self._epoch(epoch_reason)
             self.lock.notify_all()
         if epoch_reason:
             log.warning("vehicle %s", epoch_reason)
             if self.on_epoch is not None:
                 self.on_epoch(epoch_reason)
+
+    def _epoch(self, reason: str) -> None:
+        v = self.v
+        v.epoch += 1
+        v.epoch_reason = reason
+        v.warnings["epoch"] = (f"vehicle {reason} (#{v.epoch}): telemetry and EKF origin requested again; "
+                               "check what it is doing before resuming")
+        self._add_line(4, "WARNING: link: " + v.warnings["epoch"])
 
     def _drop(self, kind: str, reason: str, now: float) -> None:
         v = self.v
@@ -312,6 +319,15 @@ class Telemetry:
                 self._add_line(4, "WARNING: link: " + text)
         else:
             v.warnings.pop("origin", None)
+
+    def new_epoch(self, reason: str) -> None:
+        """Record a reboot / reconnect seen outside the messages (a new transport socket)."""
+        with self.lock:
+            self._epoch(reason)
+            self.lock.notify_all()
+        log.warning("vehicle link: %s", reason)
+        if self.on_epoch is not None:
+            self.on_epoch(reason)
 
     # --- queries ---------------------------------------------------------------------------------
     def stream_age(self, kind: str) -> float:

@@ -103,11 +103,12 @@ class MavTransport:
     """
 
     def __init__(self, url: str, source_system: int, source_component: int, on_message: Callable[[Any], None],
-                 tlog: str | Path | None = None) -> None:
+                 tlog: str | Path | None = None, on_reconnect: Callable[[str], None] | None = None) -> None:
         self.url = url
         self.device, self.baud = parse_connection(url)
         self.source_system, self.source_component = source_system, source_component
         self.on_message = on_message
+        self.on_reconnect = on_reconnect  # called when pymavlink replaced the socket (TCP reconnect)
         self.tlog_request = tlog
         self.tlog: Path | None = None
         self.conn: Any = None
@@ -216,10 +217,15 @@ class MavTransport:
                 log.debug("heartbeat not sent: %s", exc)
 
     def _rx_loop(self) -> None:
+        port = None
         while not self.stop.is_set():
             conn = self.conn
             if conn is None:
                 return
+            now_port = getattr(conn, "port", None)
+            if port is not None and now_port is not None and now_port is not port and self.on_reconnect:
+                self.on_reconnect(f"transport reconnected ({self.url})")
+            port = now_port if now_port is not None else port
             try:
                 msg = conn.recv_match(blocking=True, timeout=0.05)
             except Exception as exc:  # socket closed under us, serial unplugged
