@@ -228,7 +228,7 @@ class ConsoleApp:
                 pose=st.pose, mode=getattr(st.mode, "value", str(st.mode)), armed=bool(st.armed),
                 battery=st.battery, healthy=bool(st.link_ok),
                 detail="" if st.health in ("", "ok") else str(st.health), stamp=float(st.time),
-                messages=messages, landed=getattr(st, "landed", None),
+                messages=messages, landed=None if getattr(st, "landed", None) is None else bool(st.landed),
             ))
             with seen_lock:  # state arrives from the link's thread and from connect()
                 fresh = [text for number, text in messages if number > seen[0]]

@@ -239,13 +239,14 @@ class ManagerRunner:
     def _on_event(self, event: Any) -> None:
         p = event.progress
         state = getattr(p.status, "value", str(p.status))
-        self._session.set_run(RunStatus(state, p.segment, float(p.fraction), event.message or p.message))
+        status = RunStatus(state, p.segment, float(p.fraction), event.message or p.message)
+        if state != self._last_state and state in ("done", "aborted"):
+            self._session.mission_finished(state, p.mission_id, status)  # the status and what follows, at once
+        else:
+            self._session.set_run(status)
+        self._last_state = state
         if event.level in ("warning", "error"):
             self._session.notify("Mission", event.message, event.level)
-        if state != self._last_state:
-            self._last_state = state
-            if state in ("done", "aborted"):
-                self._session.mission_finished(state, p.mission_id)
 
 
 def make_runner(link: Any, session: Session, *, failsafe_after: float = 3.0,

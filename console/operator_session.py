@@ -23,8 +23,8 @@ from planner.mission import Mission, MissionError
 from planner.route import path_points
 
 from . import operator_state as rules
-from .session_types import Notice, SessionError, Vec3
-from .topics import MISSION, ROUTE
+from .session_types import Notice, RunStatus, SessionError, Vec3
+from .topics import MISSION, ROUTE, RUN
 
 log = logging.getLogger(__name__)
 
@@ -185,32 +185,42 @@ class OperatorRules:
             if self._running is not None and self._running.mission.id == mission_id:
                 self._running = None
 
-    def mission_finished(self, state: str, mission_id: str | None) -> None:
-        """The manager ended a mission (``done`` or ``aborted``): apply the rules for what is next."""
+    def mission_finished(self, state: str, mission_id: str | None, status: RunStatus | None = None) -> None:
+        """The manager ended a mission (``done`` or ``aborted``; its final ``status``): apply the rules
+        for what is next in one step with the status change (no tab sees one without the other).
+
+        The operator's mission done: its route is retired and the start follows the robot. Aborted:
+        the mission is retired and the goals not reached yet are re-planned from the robot once it
+        rests. A vehicle command (Land here, Return) ended: the registered goals are re-planned from
+        where the robot now is (and the mission rebuilt if there was one).
+        """
         with self._lock:  # type: ignore[attr-defined]
+            if status is not None:
+                self._run = status  # type: ignore[attr-defined]
             running = self._running
             if running is not None and mission_id is not None and running.mission.id != mission_id:
                 running = None
             self._running, self._retired_run = None, None
             command = running.command if running is not None else ""
-        if not command and state == "done":
-            self.complete_mission()  # type: ignore[attr-defined]
-            self.notify("Mission done", "the route now starts where the robot stands", "success")  # type: ignore[attr-defined]
-            return
-        with self._lock:  # type: ignore[attr-defined]
             route, ws = self._route, self._workspace  # type: ignore[attr-defined]
-            snap = self.route_snapshot()  # type: ignore[attr-defined]
-            goals = list(snap.goals)
-            if not command:  # aborted: retire the mission, keep the goals not reached yet
+            if not command and state == "done":
+                route.clear()
                 self._mission = None  # type: ignore[attr-defined]
-                origin = rules.robot_origin(self._robot, ws) if self._robot is not None else None  # type: ignore[attr-defined]
-                if running is not None and origin is not None:
-                    goals = rules.goals_left(running.goals, running.path, running.ends, origin)
-            self._replan_goals = goals if (goals or route.registered) else None
-            self._rebuild_after_replan = bool(command) and self._mission is not None  # type: ignore[attr-defined]
-            changed = self._follow_robot_locked()
+                self._replan_goals = None
+            else:
+                goals = list(self.route_snapshot().goals)  # type: ignore[attr-defined]
+                if not command:  # aborted: retire the mission, keep the goals not reached yet
+                    self._mission = None  # type: ignore[attr-defined]
+                    origin = rules.robot_origin(self._robot, ws) if self._robot is not None else None  # type: ignore[attr-defined]
+                    if running is not None and origin is not None:
+                        goals = rules.goals_left(running.goals, running.path, running.ends, origin)
+                self._replan_goals = goals if (goals or route.registered) else None
+                self._rebuild_after_replan = bool(command) and self._mission is not None  # type: ignore[attr-defined]
+            self._follow_robot_locked()
             self._save_locked()  # type: ignore[attr-defined]
-        self._emit([(ROUTE, None), (MISSION, None)] if changed or not command else [(MISSION, None)])  # type: ignore[attr-defined]
+        self._emit(([(RUN, status)] if status is not None else []) + [(ROUTE, None), (MISSION, None)])  # type: ignore[attr-defined]
+        if not command and state == "done":
+            self.notify("Mission done", "the route now starts where the robot stands", "success")  # type: ignore[attr-defined]
 
     # --- operator actions --------------------------------------------------------------------------
     def replan_from_robot(self) -> str:

@@ -8,6 +8,7 @@ the body centre) and moved to the reported ``world <- robot`` pose on every stat
 from __future__ import annotations
 
 import html
+import logging
 import math
 import threading
 import time
@@ -21,6 +22,8 @@ from .client_notice import tell
 from .session import ROBOT, RUN, RobotSnapshot, Session, SessionError
 from .vehicle_commands import LABELS, VehicleCommands
 from .wording import mode_text
+
+log = logging.getLogger(__name__)
 
 BODY_RGB = (60, 66, 78)
 ARM_RGB = (110, 118, 130)
@@ -150,6 +153,7 @@ class RobotView:
         try:
             message = self._commands.run(name)
         except SessionError as exc:
+            log.info("vehicle command %s not done: %s", name, exc)
             tell(event.client, f"{LABELS[name]}: not done", str(exc), "yellow")
             return
         tell(event.client, LABELS[name], message, "blue")

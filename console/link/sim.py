@@ -160,7 +160,7 @@ class SimRobot(RobotLink):
         self._vel = np.zeros(3)
         self._check_free(self._pos, "the start")
         self._floor = config.workspace.floor
-        self._landed = self._pos[2] <= self._floor + 1e-6
+        self._landed = bool(self._pos[2] <= self._floor + 1e-6)
         self._armed = not self._landed
         self._battery = 1.0
         self._sim_time = 0.0
