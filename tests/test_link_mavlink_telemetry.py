@@ -179,13 +179,16 @@ def test_refused_set_message_interval_falls_back_to_request_data_stream_and_retr
 # --- 4 / 5. identity -----------------------------------------------------------------------------
 
 
+@pytest.mark.parametrize("any_component", [False, True])  # by component id and type, or by type alone
 @pytest.mark.parametrize("component, mav_type, autopilot", [
     (154, mav.MAV_TYPE_GIMBAL, mav.MAV_AUTOPILOT_GENERIC),  # fault 4
     (100, mav.MAV_TYPE_CAMERA, mav.MAV_AUTOPILOT_INVALID),  # neighbour: a camera
     (100, mav.MAV_TYPE_CAMERA, mav.MAV_AUTOPILOT_GENERIC),
 ])
-def test_the_autopilot_is_chosen_not_a_component_that_heartbeats_first(component, mav_type, autopilot) -> None:
-    with vehicle(faults={"components": [(component, mav_type, autopilot)], "autopilot_heartbeat_delay": 0.6}) \
+def test_the_autopilot_is_chosen_not_a_component_that_heartbeats_first(component, mav_type, autopilot,
+                                                                     any_component) -> None:
+    cfg = config(autopilot_component=None) if any_component else config()
+    with vehicle(cfg, faults={"components": [(component, mav_type, autopilot)], "autopilot_heartbeat_delay": 0.6}) \
             as (link, emu):
         assert "component 1)" in link.description
         assert any(c.startswith(f"1/{component} ") for c in link.components())
