@@ -72,6 +72,7 @@ class Recorder:
         self._state_key: Any = None
         self._failed: str | None = None
         self.dropped = 0
+        self.cpu_seconds = 0.0  # CPU spent by the listener and the writer thread [s] (bench/recording_overhead.py)
         self.paths: list[Path] = []
         self.counts: dict[str, int] = {}
         # writer-thread state
@@ -132,6 +133,13 @@ class Recorder:
     def _on_event(self, topic: str, payload: Any) -> None:
         if self._failed is not None:
             return
+        t0 = time.thread_time()
+        try:
+            self._listen(topic, payload)
+        finally:
+            self.cpu_seconds += time.thread_time() - t0  # approximate under concurrent announcements
+
+    def _listen(self, topic: str, payload: Any) -> None:
         if topic == ROBOT:
             self._on_robot(payload)
             return
@@ -177,6 +185,7 @@ class Recorder:
                 break
             if self._failed is not None:
                 continue
+            t0 = time.thread_time()
             try:
                 self._write_item(*item)
                 self._maybe_rotate()
@@ -185,6 +194,8 @@ class Recorder:
             except Exception as exc:  # an encoding bug must not take the console down
                 log.exception("recording: could not record %s", item[0])
                 self._fail(f"could not record {item[0]}: {exc}")
+            finally:
+                self.cpu_seconds += time.thread_time() - t0
         try:
             self._finish()
         except OSError as exc:
