@@ -10,8 +10,7 @@ is 0). As in MCP, any of the 26 moves is allowed when its destination is passabl
 
 The heuristic is first ``min_cost * resolution * octile(a, goal)`` where ``octile`` is the 3D
 octile distance (in cells) and ``min_cost`` the smallest finite cost in the grid. When that is not
-enough (more than ``max(nx * ny, LAYER_BUDGET_MIN)`` expansions, typically when the only way is to
-fly), the search builds the per-goal layer-aware heuristic of :mod:`planner.heuristic` and
+enough (more than :func:`default_layer_budget` expansions, typically when the only way is to fly), the search builds the per-goal layer-aware heuristic of :mod:`planner.heuristic` and
 continues with it (the open list re-keyed; the closed cells kept).
 
 The compiled kernel (numba) keeps flat C-order indices in an indexed binary heap (each open cell
@@ -39,6 +38,7 @@ __all__ = [
     "AStarResult",
     "AStarSearcher",
     "astar",
+    "default_layer_budget",
     "dijkstra_reference",
     "min_finite_cost",
     "octile_distance",
@@ -46,7 +46,7 @@ __all__ = [
 
 _MAX_GEN = (1 << 30) - 1  # stamps 2*gen and 2*gen+1 must fit int32
 _HEAP_START = 4096
-LAYER_BUDGET_MIN = 16384  # default: expansions before the layer-aware heuristic is built (>= nx * ny)
+LAYER_BUDGET_MIN = 256  # the default budget of octile expansions is at least this (see layer_budget)
 _NEVER = np.iinfo(np.int64).max
 _MARGIN = 1.0 - 1e-9  # the layer-aware bound times this: still consistent, safe against rounding
 _NO_LAYER = LayerHeuristic(np.zeros(1), np.zeros(1, np.int64), np.zeros(0, np.int64), np.zeros((0, 1)),
@@ -102,6 +102,16 @@ def _check_cell(cost: np.ndarray, cell: Sequence[int], what: str) -> tuple[int, 
     if not (v >= 0.0 and math.isfinite(v)):
         raise ValueError(f"{what} cell {c} is impassable (cost {v})")
     return c  # type: ignore[return-value]
+
+
+def default_layer_budget(shape: tuple[int, int, int]) -> int:
+    """Octile expansions before the layer-aware tables are built by default: about what the
+    tables cost (one pass over the ``nx * ny * nz`` cells, about 1/128 of an expansion each, and
+    a 2D Dijkstra over the ``nx * ny`` columns, about 1/8 each), so that a search that needs them
+    spends at most about twice the best choice made in hindsight, and an easy one (the walk
+    cases: the goal found within the budget) never pays for them."""
+    nx, ny, nz = shape
+    return max(LAYER_BUDGET_MIN, (nx * ny * nz) // 128 + (nx * ny) // 8)
 
 
 def min_finite_cost(cost: np.ndarray) -> float:
@@ -185,7 +195,7 @@ class AStarSearcher:
             raise ValueError(f"min_cost must be a finite number >= 0, got {min_cost}")
         nx, ny, nz = arr.shape
         if layer_budget is None:
-            budget = max(nx * ny, LAYER_BUDGET_MIN)
+            budget = default_layer_budget((nx, ny, nz))
         elif (isinstance(layer_budget, (bool, np.bool_)) or not isinstance(layer_budget, (int, np.integer))
               or layer_budget < 0):
             raise ValueError(f"layer_budget must be an integer >= 0 (expansions), got {layer_budget!r}")
@@ -255,9 +265,7 @@ def astar(
         layer_heuristic: Allow the switch to the layer-aware heuristic (:mod:`planner.heuristic`).
         layer_budget: Expansions made with the octile bound alone before the per-goal tables of
             the layer-aware heuristic are built and the open list re-keyed (``None``:
-            ``max(nx * ny, LAYER_BUDGET_MIN)``, so the O(nx * ny) tables cost at most about what
-            the search already spent; small searches, such as the console's, never build them;
-            0: from the start).
+            :func:`default_layer_budget`, about what the tables cost; 0: from the start).
 
     The first heuristic ``h(a) = min_cost * resolution * octile(a, goal)`` is consistent: octile is
     the shortest-path metric of the 26-lattice with move lengths ``sqrt(n)``, so it obeys the

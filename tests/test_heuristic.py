@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 from scipy import ndimage
 
-from planner.astar import AStarSearcher, astar, dijkstra_reference
+from planner.astar import AStarSearcher, astar, default_layer_budget, dijkstra_reference
 from planner.heuristic import build_layer_heuristic, heuristic_field
 
 MOVES = [d for d in itertools.product((-1, 0, 1), repeat=3) if d != (0, 0, 0)]
@@ -176,12 +176,18 @@ def test_fly_only_room_expands_far_less_with_the_layer_heuristic() -> None:
     assert auto.expanded < octile.expanded
 
 
-def test_small_searches_never_build_the_tables() -> None:
-    # The console's grid (20 x 32 x 12): the default budget exceeds its cell count.
+def test_default_budget_builds_the_tables_only_when_the_octile_bound_struggles() -> None:
+    # The console's grid (20 x 32 x 12): a wall to fly over needs the tables, an open room not.
     cost = np.broadcast_to(np.array([1.0, 12.0] + [3.0] * 10), (20, 32, 12)).copy()
-    cost[8:10, :, :6] = np.inf
-    r = astar(cost, (2, 2, 0), (17, 29, 0), resolution=0.25)
-    assert r.found and r.heuristic == "octile"
+    assert astar(cost, (2, 2, 0), (17, 29, 0), resolution=0.25).heuristic == "octile"
+    cost[:, 14:16, :5] = np.inf
+    s = AStarSearcher()
+    r = s.search(cost, (2, 2, 0), (17, 29, 0), resolution=0.25)
+    oct_only = s.search(cost, (2, 2, 0), (17, 29, 0), resolution=0.25, layer_heuristic=False)
+    assert r.heuristic == "layer" and oct_only.heuristic == "octile"
+    assert r.cost == pytest.approx(oct_only.cost, rel=1e-12)
+    assert r.expanded < oct_only.expanded
+    assert default_layer_budget((20, 32, 12)) < oct_only.expanded
 
 
 @pytest.mark.parametrize("bad", [-1, 1.5, True, "3"])
