@@ -173,7 +173,7 @@ class MissionView:
             notes = []
             if view.execute_blocker is not None and not run.active and mission is not None:
                 notes.append(f"Execute is off: {view.execute_blocker}")
-            elif view.route_note is not None:
+            if view.route_note is not None and view.route_note != view.execute_blocker:
                 notes.append(view.route_note)
             if view.air_end is not None:
                 notes.append(f"⚠ the mission ends hovering {view.air_end:.1f} m above the floor: add a landing")

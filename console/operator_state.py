@@ -139,6 +139,9 @@ def vehicle_commands(robot: RobotSnapshot | None, run: RunStatus, ws: Workspace,
         return off
     busy = "the mission is paused: abort it first" if run.active else ""
     lost = "" if robot.healthy else "the robot link is lost"
+    if run.state == "failsafe":  # the manager holds or lands the robot: nothing may interfere
+        busy = "the failsafe is acting (holding, then landing): wait for it or abort the mission"
+        lost = lost or busy
     out = {"hold": CommandState(True, not lost, lost)}
     if up:
         why = lost or busy

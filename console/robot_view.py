@@ -134,6 +134,7 @@ class RobotView:
                                           hint=f"Vehicle command: {label}")
                 b.on_click(lambda e, n=name: self._on_command(e, n))
                 self._buttons[name] = b
+            self._why_not = server.gui.add_markdown("")
         self._frame = server.scene.add_frame("/robot", show_axes=False, visible=False)
         server.scene.add_mesh_trimesh("/robot/twin", robot_mesh())
         self._label = server.scene.add_label("/robot/label", "robot", position=(0.0, 0.0, 0.55),
@@ -173,6 +174,8 @@ class RobotView:
                 button.visible = c.shown
                 button.disabled = not c.enabled
                 button.hint = f"Vehicle command: {LABELS[name]}" + (f" (not now: {c.reason})" if c.reason else "")
+            off = sorted({c.reason for c in states.values() if c.shown and not c.enabled and c.reason})
+            self._why_not.content = "".join(f"<small style='color:#b35c00'>{html.escape(r)}</small><br>" for r in off)
 
     def show(self, r: RobotSnapshot, force: bool = False) -> None:
         """Move the twin to ``r.pose`` (throttled) and refresh the status line."""

@@ -207,6 +207,9 @@ def test_vehicle_commands_follow_the_robot_state() -> None:
     paused = shown(_hover(2.5, 3.0, 1.5), RunStatus("paused"))
     assert paused["hold"] == (True, True) and paused["land"] == (True, False) and paused["return"] == (True, False)
     assert "abort it first" in rules.vehicle_commands(_hover(2.5, 3.0, 1.5), RunStatus("paused"), ws, launch)["land"].reason
+    assert not any(e for _, e in shown(_hover(2.5, 3.0, 1.5), RunStatus("failsafe")).values())  # never against the failsafe
+    lost = RobotSnapshot(Pose.from_xyz_yaw(2.5, 3.0, 1.5), mode="holding", armed=True, healthy=False, landed=False)
+    assert "link is lost" in rules.vehicle_commands(lost, idle, ws, launch)["hold"].reason
     armed = shown(_ground(2.5, 3.0, armed=True))
     assert armed["disarm"] == (True, True) and armed["land"] == (False, False) and armed["return"] == (True, True)
     assert shown(_ground(2.5, 0.7, armed=True))["return"] == (True, False)  # already home
@@ -338,3 +341,48 @@ def test_an_edit_across_the_rest_of_a_paused_mission_retires_it_everywhere(stack
     wait_for(lambda: _near(s.route_snapshot().start, here, 0.01), what="re-planned from the robot")
     assert s.route_snapshot().goals[-1][:2] == pytest.approx((2.625, 3.375))
     assert s.build_mission().segments[0].start == pytest.approx(here, abs=rules.START_TOLERANCE)
+
+
+# --- the views only draw the rules ------------------------------------------------------------------
+def test_the_panels_show_the_vehicle_commands_replan_and_landing_actions_the_rules_allow(tmp_path: Path) -> None:
+    import viser
+
+    from console.mission_view import MissionView
+    from console.robot_view import RobotView
+
+    server = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
+    try:
+        s = Session(tmp_path / "s", start=START, autosave=False)
+        robot_view = RobotView(server, s, "sim", commands=VehicleCommands(s, None, None))
+        mission_view = MissionView(server, s, None)
+        buttons = robot_view._buttons
+
+        def usable() -> dict[str, bool]:
+            return {n: b.visible and not b.disabled for n, b in buttons.items()}
+
+        s.set_robot(_ground(2.5, 0.7))
+        assert not any(b.visible for b in buttons.values())
+        s.set_robot(_hover(2.5, 2.0, 1.5))
+        assert usable() == {"hold": True, "land": True, "return": True, "disarm": False}
+        s.set_run(RunStatus("paused", 0, 0.2))
+        assert usable() == {"hold": True, "land": False, "return": False, "disarm": False}
+        assert buttons["land"].visible and "abort it first" in robot_view._why_not.content
+        s.set_run(RunStatus("running", 0, 0.3))
+        assert not any(b.visible for b in buttons.values())  # the mission's Pause / Abort drive it
+        s.set_run(RunStatus("aborted", 0, 0.3))
+        with pytest.raises(SessionError, match="no mission manager"):  # the view's call says why
+            VehicleCommands(s, None, None).run("land")
+
+        s.set_robot(_ground(2.5, 0.7))
+        assert s.add_goal((2.5, 2.5, 1.5)).ok
+        s.register()
+        s.build_mission()
+        assert mission_view._landing.visible and "ends hovering" in mission_view._why.content
+        s.add_landing()
+        assert not mission_view._landing.visible
+        s.set_robot(_ground(1.0, 1.0))  # moved with a registered route: stale, one action
+        assert mission_view._replan.visible and "from the robot" in mission_view._why.content
+        s.replan_from_robot()
+        assert not mission_view._replan.visible
+    finally:
+        server.stop()
