@@ -172,7 +172,7 @@ def test_full_walk_takeoff_fly_land_walk_mission(vehicle) -> None:
     assert sum(t[3] == POSITION_YAW_MASK for t in emu.record.targets) > 0.8 * len(emu.record.targets)
     # the first walking target: world (2.5, 1.8) is 1.1 m north of the origin
     assert walk_targets[0][:2] == pytest.approx((1.1, 0.0), abs=1e-4)
-    assert min(t[2] for t in air_targets) == pytest.approx(-1.875, abs=1e-4)
+    assert min(t[2] for t in air_targets) == pytest.approx(-1.875, abs=1e-3)  # the flight height (mm: settling)
     # progress only grows and reaches 1; the console heard about control switches
     assert fractions == sorted(fractions) and fractions[-1] == 1.0
     msgs = _events(manager)
