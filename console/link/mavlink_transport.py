@@ -37,6 +37,10 @@ _URL_RE = re.compile(r"^(udpin|udpout|udp|udpbcast|tcp|tcpin):([^:]+):(\d+)$")
 FAILSAFE_PARAMS = ("FS_GCS_ENABLE", "FS_GCS_TIMEOUT", "FS_EKF_ACTION")
 """ArduPilot Copter failsafe parameters read at connect."""
 
+ASKS = 5
+"""How often the EKF origin and the failsafe parameters are asked for (per connection / reboot): an
+indoor vehicle may have no origin, other firmware no such parameters."""
+
 DATA_STREAMS = {"EXTENDED_STATUS": 2, "POSITION": 6, "EXTRA1": 10, "EXTRA3": 12}
 """REQUEST_DATA_STREAM groups (MAV_DATA_STREAM) carrying SYS_STATUS, LOCAL_POSITION_NED, ATTITUDE,
 EXTENDED_SYS_STATE / EKF_STATUS_REPORT in ArduPilot."""
@@ -270,6 +274,7 @@ class StreamKeeper:
         self._thread: threading.Thread | None = None
         self._origin_asked = 0.0
         self._params_asked = 0.0
+        self._asks = {"origin": 0, "params": 0}  # per epoch: a vehicle without an origin / those parameters
         self.want_origin = True
 
     def start(self) -> None:
@@ -288,6 +293,7 @@ class StreamKeeper:
             self.tel.v.origin_now = None  # re-read: a rebooted vehicle sets a new EKF origin
         self.want_origin = True
         self._origin_asked = 0.0
+        self._asks = {"origin": 0, "params": 0}
         self._wake.set()
 
     def _loop(self) -> None:
@@ -345,12 +351,14 @@ class StreamKeeper:
             missing = [p for p in FAILSAFE_PARAMS if p not in self.tel.v.params]
         if have_origin:
             self.want_origin = False
-        if self.want_origin and now - self._origin_asked > self.retry_period:
+        if self.want_origin and now - self._origin_asked > self.retry_period and self._asks["origin"] < ASKS:
             self._origin_asked = now
+            self._asks["origin"] += 1
             self.transport.send("command_long_send", sys_id, comp, mav.MAV_CMD_REQUEST_MESSAGE, 0,
                                 mav.MAVLINK_MSG_ID_GPS_GLOBAL_ORIGIN, 0, 0, 0, 0, 0, 0)
-        if missing and now - self._params_asked > self.retry_period:
+        if missing and now - self._params_asked > self.retry_period and self._asks["params"] < ASKS:
             self._params_asked = now
+            self._asks["params"] += 1
             for name in missing:
                 self.transport.send("param_request_read_send", sys_id, comp, name.encode(), -1)
         with self.tel.lock:
