@@ -6,8 +6,8 @@ thread turns it into messages (:mod:`console.recording_schemas`) and writes them
 writer. The session's lock is never held while encoding or writing.
 
 Files: ``<session>/recordings/morphonavi-<UTC time>.mcap``; past ``max_bytes`` a file is finished and
-the next part ``...-002.mcap`` starts with the current state written again, so every part opens on
-its own. Robot state arrives at up to 50 Hz: pose and ``/tf`` are written at most ``pose_hz`` times
+the next part ``...-002.mcap`` starts with the current state written again (stamped with the time of
+the switch), so every part opens on its own. Robot state arrives at up to 50 Hz: pose and ``/tf`` are written at most ``pose_hz`` times
 a second, the state JSON at most twice a second or when its mode, arming, health or messages change.
 
 A folder that cannot be created or written, or a full disk, stops the recording with ONE notice to
@@ -234,7 +234,8 @@ class Recorder:
             raise FileExistsError(f"{self.folder}: too many recordings named {self._base}*")
         self._base = base
         self.paths.append(path)
-        self._writer = Writer(self._stream, compression=CompressionType.LZ4)
+        chunk = max(4096, min(1 << 20, self.max_bytes // 4))  # data reach the file chunk by chunk: rotate on time
+        self._writer = Writer(self._stream, chunk_size=chunk, compression=CompressionType.LZ4)
         self._writer.start(profile="", library="morphonavi (mcap + foxglove-sdk schemas)")
         self._channels = {}
         log.info("recording the session to %s", path)
@@ -320,9 +321,10 @@ class Recorder:
             return
         self._finish()
         self._open()
-        latest = sorted((ns, topic, data) for topic, (ns, data) in self._latest.items())
-        for ns, topic, data in latest:  # the new part opens on its own: the current state first
-            self._emit(topic, ns, data)
+        now = max(ns for ns, _ in self._latest.values())
+        for topic in _STATE_TOPICS:  # the new part opens on its own: the current state first, stamped now
+            if topic in self._latest:
+                self._emit(topic, now, self._latest[topic][1])
 
     def _finish(self) -> None:
         if self._writer is not None:

@@ -9,6 +9,7 @@ up to that time. No robot link, no mapping, no saving: edits and commands are re
 from __future__ import annotations
 
 import html
+import math
 import logging
 import threading
 import time
@@ -137,16 +138,15 @@ class ReplayApp:
             dt, last = now - last, now
             if not self._playing:
                 continue
-            t = self._t + dt * self._speed
-            if t >= self.recording.duration:
-                t = self.recording.duration
-                self._playing = False
-                self._show_play()
+            t = min(self._t + dt * self._speed, self.recording.duration)
             try:
                 self.seek(t)
             except Exception:  # a broken message must not stop the player thread silently
                 log.exception("replay: cannot show t = %.2f s", t)
                 self._playing = False
+            if t >= self.recording.duration:  # the end is shown: stop there
+                self._playing = False
+                self._show_play()
 
     # --- layout -------------------------------------------------------------------------------------
     def _layout(self) -> None:
@@ -163,7 +163,7 @@ class ReplayApp:
         with gui.add_folder("Replay"):
             gui.add_markdown(f"<small>Recording <code>{html.escape(Path(rec.path).name)}</code>: "
                              f"{rec.duration:.1f} s, read-only</small>")
-            slider = gui.add_slider("Time [s]", 0.0, max(rec.duration, 0.1), 0.1, 0.0,
+            slider = gui.add_slider("Time [s]", 0.0, max(math.ceil(rec.duration * 10) / 10, 0.1), 0.1, 0.0,
                                     hint="Seconds from the start of the recording")
             self._play_btn = gui.add_button("Play", icon=viser.Icon.PLAYER_PLAY, color="green")
             speed = gui.add_dropdown("Speed", SPEEDS, initial_value="1", hint="Playback speed (x real time)")
@@ -208,6 +208,6 @@ class ReplayApp:
         wall = time.strftime("%Y-%m-%d %H:%M:%S", time.gmtime(state.time / 1e9))
         self._clock.content = (f"<small><b>{self._t:.1f} s</b> of {self.recording.duration:.1f} s · {wall} UTC"
                                f"{' · playing x' + format(self._speed, 'g') if self._playing else ''}</small>")
-        lines = [f"<code>{(t - self.recording.start) / 1e9:6.1f} s</code> {html.escape(text[:140])}"
+        lines = [f"<code>{(t - self.recording.start) / 1e9:6.1f} s</code> {html.escape(' '.join(text.split())[:140])}"
                  for t, text in state.log[-6:]]
         self._log.content = "<small>" + "<br>".join(lines) + "</small>" if lines else ""

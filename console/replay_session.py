@@ -13,6 +13,8 @@ from __future__ import annotations
 
 import shutil
 import tempfile
+import time
+from dataclasses import replace
 from typing import Any, NoReturn
 
 from planner.grid import build_grid
@@ -88,8 +90,9 @@ class ReplaySession(Session):
                 self._capture = state.capture
                 events.append((CAPTURE, state.capture))
             if (rs.ROBOT_STATE in changed or rs.POSE in changed) and state.robot is not None:
-                self._robot = state.robot
-                events.append((ROBOT, state.robot))
+                # the report's age as it was at the shown time (the views compare stamps with the clock)
+                self._robot = replace(state.robot, stamp=time.time() - (state.time / 1e9 - state.robot.stamp))
+                events.append((ROBOT, self._robot))
             if rs.PROGRESS in changed:
                 self._run = state.run
                 events.append((RUN, state.run))

@@ -233,3 +233,29 @@ def test_a_full_disk_gives_one_notice(tmp_path: Path) -> None:
     assert len(stopped) == 1, notices
     assert len(session.scene.objects) == 41
 
+
+
+def test_a_large_recording_is_split_into_parts_that_each_open_on_their_own(tmp_path: Path) -> None:
+    from console.replay import Recording
+
+    session, notices = _session_with_notices(tmp_path)
+    rec = Recorder(session, folder=tmp_path / "rec", max_bytes=60_000).start()
+    for k in range(6):  # each map carries the proxy models: tens of kB per change
+        objs = tuple(SceneObject(f"o{i}", "office_chair", (0.5 + (i % 8) * 0.5, 2.0 + (i // 8) * 0.6 + 0.01 * k, 0.5),
+                                 (0.6, 1.0, 0.6)) for i in range(16))
+        session.spawn(Scene(objects=objs), f"batch {k}")
+        _churn(session, 10)
+    rec.close()
+    assert rec.failed is None and not [n for n in notices if n.title == "Recording stopped"]
+    parts = rec.paths  # in the order they were written: name.mcap, name-002.mcap, ...
+    assert len(parts) >= 2 and sorted(parts) == sorted((tmp_path / "rec").glob("*.mcap"))
+    assert parts[1].name == parts[0].name.replace(".mcap", "-002.mcap")
+    last_scene = session.scene
+    for n, part in enumerate(parts):
+        assert part.stat().st_size < 60_000 + 2 * (1 << 16)  # rotated close to the limit
+        r = Recording(part)  # each part holds the session info and the state as it was when it began
+        assert r.info is not None and r.info.workspace == session.workspace
+        first = r.state_at(r.start)
+        assert len(first.scene.objects) == (0 if n == 0 else 16)
+    end = Recording(parts[-1]).state_at(Recording(parts[-1]).end)
+    assert [o.position for o in end.scene.objects] == [o.position for o in last_scene.objects]

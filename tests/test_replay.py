@@ -132,3 +132,65 @@ def test_bad_files_are_refused_with_exit_code_2(recorded: Any, tmp_path: Path, c
     assert Recording(good).count("/morphonavi/capture") == 1
     with open(good, "rb") as f:
         assert make_reader(f).get_summary() is not None
+
+
+CHROMIUM = Path("/usr/bin/chromium")
+REPO = Path(__file__).resolve().parents[1]
+BROWSER_ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
+                "--disable-background-networking", "--disable-component-update", "--disable-sync",
+                "--use-angle=swiftshader", "--enable-unsafe-swiftshader"]
+
+
+def _browser_missing() -> str | None:
+    if not CHROMIUM.exists():
+        return "Debian's chromium is not installed (/usr/bin/chromium); run `make browser`"
+    try:
+        import playwright.sync_api  # noqa: F401
+    except ImportError:
+        return "the playwright package is not installed (pip install playwright)"
+    return None
+
+
+@pytest.mark.skipif(_browser_missing() is not None, reason=_browser_missing() or "")
+def test_replay_in_the_browser_plays_and_pauses(recorded: Any, replay: Any, tmp_path: Path) -> None:
+    """The page has the time slider and Play / Pause; a screenshot mid-mission goes to docs/replay.png
+    when MORPHONAVI_UPDATE_SCREENSHOT=1."""
+    import os
+    import tempfile
+    import time
+
+    from playwright.sync_api import sync_playwright
+
+    path, _ = recorded
+    _, msgs = read_all(path)
+    running = [m[2] for m in msgs if m[0] == "/mission/progress" and m[3]["state"] == "running"]
+    done = [m[2] for m in msgs if m[0] == "/mission/progress" and m[3]["state"] == "done"]
+    with sync_playwright() as pw:
+        ctx = pw.chromium.launch_persistent_context(
+            tempfile.mkdtemp(prefix="chromium-", dir=tmp_path), executable_path=str(CHROMIUM), headless=True,
+            args=BROWSER_ARGS, viewport={"width": 1440, "height": 900})
+        try:
+            page = ctx.new_page()
+            page.goto(replay.url)
+            play = page.get_by_role("button", name="Play")
+            play.wait_for(timeout=30_000)
+            assert wait_until(lambda: len(replay.server.get_clients()) == 1, 15), "the page did not connect"
+            page.get_by_text("Time [s]").first.wait_for(timeout=10_000)
+            replay.seek(0.0)
+            play.click()
+            assert wait_until(lambda: replay.playing and replay.time > 0.0, 15), "Play did not start the replay"
+            page.get_by_role("button", name="Pause").click()
+            assert wait_until(lambda: not replay.playing, 15), "Pause did not stop the replay"
+            # mid-mission: the robot on its way, the mission path, the capture's photo
+            replay.seek_time((running[0] + done[-1]) // 2)
+            assert replay.session.run.state == "running" and replay.session.mission is not None
+            page.get_by_text("s of").first.wait_for(timeout=10_000)
+            page.add_style_tag(content=".mantine-Notifications-root { display: none !important; }")
+            time.sleep(1.5)  # let the renderer settle
+            shot = tmp_path / "replay.png"
+            page.screenshot(path=str(shot))
+            assert shot.stat().st_size > 10_000
+            if os.environ.get("MORPHONAVI_UPDATE_SCREENSHOT") == "1":
+                shutil.copy(shot, REPO / "docs" / "replay.png")
+        finally:
+            ctx.close()
