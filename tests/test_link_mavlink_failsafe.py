@@ -238,6 +238,9 @@ def test_a_refusal_carries_only_its_own_reasons_even_when_they_follow_the_ack() 
         assert eventually(lambda: link.latest_state().armed)
         link.disarm()  # on the ground: allowed
         assert eventually(lambda: not link.latest_state().armed)
+        sent = [c for c, _ in emu.record.received].count(mav.MAV_CMD_COMPONENT_ARM_DISARM)
+        link.disarm()  # already disarmed: nothing to send
+        assert [c for c, _ in emu.record.received].count(mav.MAV_CMD_COMPONENT_ARM_DISARM) == sent
 
 
 def test_disarm_is_refused_in_the_air() -> None:

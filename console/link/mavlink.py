@@ -216,11 +216,17 @@ class MavlinkLink(RobotLink):
         self.commander.arm(cancel)
 
     def disarm(self) -> None:
-        """Disarm the motors (MAV_CMD_COMPONENT_ARM_DISARM, param1 0); only on the ground."""
+        """Disarm the motors (MAV_CMD_COMPONENT_ARM_DISARM, param1 0); only on the ground and with no
+        segment running; nothing to do when already disarmed."""
         if not self.connected:
             raise LinkError("the MAVLink link is not connected")
         if self._airborne():
             raise LinkError("cannot disarm: the vehicle is in the air (land first)")
+        run = self._run
+        if run is not None and not run.done:
+            raise LinkError(f"cannot disarm: a {run.segment.kind.value} segment is running")
+        if not self.commander.armed():
+            return
         self.commander.disarm()
 
     def send_position_target(self, world: Vec3, yaw: float | None = None, component: int | None = None) -> None:
