@@ -17,6 +17,10 @@ implausible objects are refused naming the field (:func:`pipeline.scene.check_pl
 typed by the operator are resolved with :meth:`Session.resolve_name`, which
 refuses anything that would land outside the session folder.
 
+Operator rules (the route starts at the robot, what Execute and the vehicle commands allow, runs
+retired by edits, goals inside the robot's margin): :mod:`console.operator_state`, applied here by
+:class:`console.operator_session.OperatorRules`, mixed in.
+
 The pieces live next door and are re-exported here: topics in :mod:`console.topics`, value types
 in :mod:`console.session_types`, the scene merge in :mod:`console.merge`, click picking in
 :mod:`console.picking`, the session file format in :mod:`console.session_store` and the capture
@@ -34,7 +38,7 @@ from typing import Any, Callable, Sequence
 
 from pipeline.scene import Scene, SceneObject
 from planner.grid import CostWeights, GridError, PlanningGrid, Workspace, build_grid
-from planner.mission import Mission, MissionError
+from planner.mission import Mission
 from planner.route import PlanResult, Route, path_points
 
 from pipeline.scene import SceneError, check_plausible
