@@ -131,6 +131,9 @@ def add_console_parser(subparsers: argparse._SubParsersAction) -> argparse.Argum
                    help=f"session folder: the state is saved there after every change and restored at "
                         f"start (default {DEFAULT_SESSION})")
     p.add_argument("--fresh", action="store_true", help="start from an empty map instead of restoring the session")
+    p.add_argument("--no-record", dest="record", action="store_false",
+                   help="do not record the session (by default every run is recorded as MCAP in <session>/recordings; "
+                        "morphonavi replay FILE.mcap shows it again)")
     p.add_argument("--host", default="127.0.0.1",
                    help="interface to listen on (default 127.0.0.1: this machine only). Anything else lets "
                         "whoever reaches the port drive the robot: there is no login")
@@ -194,6 +197,7 @@ def cmd_console(args: argparse.Namespace) -> int:
         session_dir=args.session, host=args.host, port=args.port, models=args.models, fresh=args.fresh,
         resolution=args.resolution, margin=args.margin, captures=photo_source(args),
         failsafe_after=args.failsafe_after, failsafe_hold=args.failsafe_hold, link_options=link_options(args),
+        record=args.record,
     )
     try:
         lock = SessionLock(args.session).acquire()

@@ -259,3 +259,19 @@ def test_a_large_recording_is_split_into_parts_that_each_open_on_their_own(tmp_p
         assert len(first.scene.objects) == (0 if n == 0 else 16)
     end = Recording(parts[-1]).state_at(Recording(parts[-1]).end)
     assert [o.position for o in end.scene.objects] == [o.position for o in last_scene.objects]
+
+
+def test_no_record_turns_the_recording_off(tmp_path: Path) -> None:
+    from console.cli import build_parser
+
+    parser = build_parser()
+    assert parser.parse_args(["console"]).record is True
+    assert parser.parse_args(["console", "--no-record"]).record is False
+    app = ConsoleApp(ConsoleConfig(session_dir=tmp_path / "session", scene_dir=tmp_path / "scenes", port=0, fresh=True,
+                                   record=False)).start()
+    try:
+        assert app.recorder is None and app.session is not None
+        assert wait_until(lambda: app.session.robot is not None, 30)
+    finally:
+        app.stop()
+    assert not (tmp_path / "session" / "recordings").exists()
