@@ -43,7 +43,7 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from pipeline.catalog import Catalog
-from pipeline.geometry import OPTICAL_TO_BODY, CameraError, CameraMount, Intrinsics, Pose
+from pipeline.geometry import OPTICAL_TO_BODY, CameraError, CameraMount, Intrinsics, Pose, mount_from_gravity_height
 from pipeline.ground_truth import GroundTruthBundle, GroundTruthDetector
 from pipeline.image_io import read_image
 from pipeline.mapper import Mapper, MapperConfig, MapResult
@@ -51,6 +51,9 @@ from pipeline.models.nms import box_iou
 from pipeline.scene import write_text_atomic
 
 STAGES = ("detect", "depth", "segment_encoder", "segment_decoder", "segment", "distance", "total")
+
+CUES = ("size_prior", "ground_contact", "depth")
+"""The distance cues the bench scores one by one (optical-axis depth of the centre against the truth)."""
 
 
 class BenchError(ValueError):
@@ -79,6 +82,16 @@ class BenchSample:
     gravity_cam: tuple[float, float, float] | None
     partial_annotation: bool
     objects: tuple[GTObject, ...]
+    camera_height: float | None = None
+    """Camera centre above the floor [m] (the sample's ``camera_height``), ``None`` when absent."""
+
+    @property
+    def mount(self) -> CameraMount:
+        """The camera on a level robot at the world origin: pitch and roll from ``gravity_cam``, height
+        ``camera_height`` (floor at world z = 0, so ground-contact ranging knows the floor)."""
+        if self.camera_height is None:
+            return mount_from_gravity(self.gravity_cam)
+        return mount_from_gravity_height(self.gravity_cam or (0.0, 1.0, 0.0), self.camera_height)
 
 
 def _field(data: dict[str, Any], key: str, where: str) -> Any:
@@ -141,6 +154,12 @@ def load_dataset(dataset_dir: str | Path, catalog: Catalog) -> list[BenchSample]
             if not np.all(np.isfinite(gv)) or np.linalg.norm(gv) < 1e-6:
                 raise BenchError(f"{jpath}: gravity_cam must be a non-zero finite vector, got {g!r}")
             gravity = tuple(float(v) for v in gv / np.linalg.norm(gv))
+        height = data.get("camera_height")
+        if height is not None:
+            if isinstance(height, bool) or not isinstance(height, (int, float)) or not (
+                    math.isfinite(height) and 0 < height <= 100):
+                raise BenchError(f"{jpath}: camera_height must be a number within 0..100 m, got {height!r}")
+            height = float(height)
         objs = []
         for j, o in enumerate(data.get("objects") or []):
             ow = f"{jpath}: objects[{j}]"
@@ -161,6 +180,7 @@ def load_dataset(dataset_dir: str | Path, catalog: Catalog) -> list[BenchSample]
                 gravity_cam=gravity,  # type: ignore[arg-type]
                 partial_annotation=bool(data.get("partial_annotation", False)),
                 objects=tuple(objs),
+                camera_height=height,
             )
         )
     return samples
@@ -283,7 +303,7 @@ def run_bench(
                 )
                 mapper = Mapper(bundle, catalog, cfg)
             assert mapper is not None
-            result = mapper.run(image, sample.intrinsics, mount_from_gravity(sample.gravity_cam), Pose(),
+            result = mapper.run(image, sample.intrinsics, sample.mount, Pose(),
                                 prompts=prompts, capture_id=sample.id, image_name=sample.image_path.name)
             model_names = dict(result.scene.captures[0].models)
             for o in sample.objects:
@@ -310,9 +330,18 @@ def _score_sample(sample: BenchSample, result: MapResult, vocab: set[str], iou_t
         est, gt = placed[i], gts[j]
         err = float(np.linalg.norm(est.center_cam - gt.center_cam))  # type: ignore[operator]
         dist = float(np.linalg.norm(gt.center_cam))
+        gz = float(gt.center_cam[2])
+        cues = {c.name: {"distance": round(c.distance, 3), "sigma": round(c.sigma, 4),
+                         "error_m": round(abs(c.distance - gz), 4), "error_rel": round(abs(c.distance - gz) / gz, 4)}
+                for c in est.cues}
         matches.append({
             "label": gt.cls, "iou": round(iou, 3), "score": round(est.detection.score, 3),
             "method": est.fused.method if est.fused else None,
+            "cut": list(est.cut_sides),
+            "cues": cues,
+            "rejected": [n for n, _ in est.fusion.rejected] if est.fusion else [],
+            "sigma_z": None if est.sigma_z is None else round(est.sigma_z, 4),
+            "error_z": round(abs(float(est.center_cam[2]) - gz), 4),  # type: ignore[index]
             "gt_center": [round(float(v), 3) for v in gt.center_cam],
             "est_center": [round(float(v), 3) for v in est.center_cam],  # type: ignore[union-attr]
             "distances": {"geometric": est.geometric_z, "depth": est.depth_z,
@@ -378,6 +407,14 @@ def _summarise(records: list[dict[str, Any]], excluded: dict[str, int]) -> dict[
         missed = sum(r["missed"].count(cls) for r in records)
         by_class[cls] = {"gt": len(ms) + missed, "matched": len(ms), "error_rel": _stats([m["error_rel"] for m in ms])}
     timings = {k: _stats([r["timings"][k] for r in records if k in r["timings"]])["mean"] for k in STAGES}
+    cues: dict[str, Any] = {}
+    for name in CUES:
+        cs = [m["cues"][name] for m in matches if name in m.get("cues", {})]
+        rel = [c["error_rel"] for c in cs]
+        cues[name] = {"n": len(cs), "error_rel": _stats(rel), **_calibration([(c["error_m"], c["sigma"]) for c in cs])}
+    fz = [m for m in matches if m.get("sigma_z") is not None]
+    cues["fused"] = {"n": len(fz), "error_rel": _stats([m["error_z"] / abs(m["gt_center"][2]) for m in fz]),
+                     **_calibration([(m["error_z"], m["sigma_z"]) for m in fz])}
     complete = [r for r in records if not r["partial_annotation"]]
     placed_complete = sum(r["n_placed"] for r in complete)
     matched_complete = sum(r["n_matched"] for r in complete)
@@ -399,9 +436,22 @@ def _summarise(records: list[dict[str, Any]], excluded: dict[str, int]) -> dict[
         "error_m": _stats([m["error_m"] for m in matches]),
         "error_rel": _stats([m["error_rel"] for m in matches]),
         "mean_time_s": timings,
+        "cues": cues,
+        "truncated": {"matched": sum(1 for m in matches if m.get("cut")),
+                      "error_rel": _stats([m["error_rel"] for m in matches if m.get("cut")])},
         "by_source": by_source,
         "by_class": by_class,
     }
+
+
+def _calibration(pairs: Sequence[tuple[float, float]]) -> dict[str, float | None]:
+    """Fractions of ``(error, sigma)`` pairs with ``error <= sigma`` and ``<= 2 sigma`` (a calibrated
+    Gaussian sigma gives 68 % and 95 %)."""
+    if not pairs:
+        return {"within_1_sigma": None, "within_2_sigma": None}
+    n = len(pairs)
+    return {"within_1_sigma": sum(1 for e, s in pairs if e <= s) / n,
+            "within_2_sigma": sum(1 for e, s in pairs if e <= 2 * s) / n}
 
 
 def _fmt(v: float | None, spec: str) -> str:
@@ -435,6 +485,16 @@ def format_report(report: BenchReport) -> str:
             f"{src:10s} {b['images']:6d} {b['gt']:4d} {b['matched']:5d} {_fmt(b['error_m']['mean'], '8.2f')}m "
             f"{_fmt(b['error_m']['median'], '7.2f')}m {_fmt(b['error_rel']['median'], '8.1%')}"
         )
+    lines.append("")
+    lines.append("distance along the optical axis, per cue (matched objects; a calibrated sigma: 68 % / 95 %):")
+    lines.append(f"{'cue':16s} {'n':>4s} {'rel mean':>9s} {'rel med':>8s} {'<=1 sigma':>10s} {'<=2 sigma':>10s}")
+    for name, c in s.get("cues", {}).items():
+        lines.append(f"{name:16s} {c['n']:4d} {_fmt(c['error_rel']['mean'], '9.1%')} {_fmt(c['error_rel']['median'], '8.1%')} "
+                     f"{_fmt(c['within_1_sigma'], '10.0%')} {_fmt(c['within_2_sigma'], '10.0%')}")
+    t = s.get("truncated")
+    if t:
+        lines.append(f"cut by the border: {t['matched']} matched, 3D error relative mean "
+                     f"{_fmt(t['error_rel']['mean'], '.1%')}, median {_fmt(t['error_rel']['median'], '.1%')}")
     lines.append("")
     lines.append(f"{'class':16s} {'gt':>4s} {'found':>5s} {'rel med':>8s}")
     for cls, b in s["by_class"].items():

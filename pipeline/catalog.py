@@ -41,13 +41,16 @@ else:  # pragma: no cover - exercised on Python 3.10 only
 CATALOG_VERSION = 1
 """Newest catalog format version this loader reads."""
 
+DEFAULT_SPREAD = (0.2, 0.2, 0.2)
+"""Relative size spread ``(w, h, l)`` of a class whose entry gives no ``spread``."""
+
 Size = tuple[float, float, float]
 RGB = tuple[int, int, int]
 
 _NAME_RE = re.compile(r"^[a-z][a-z0-9_]*$")
 _COLOR_RE = re.compile(r"^#(?:[0-9a-fA-F]{6}|[0-9a-fA-F]{3})$")
 _ARTICLE_RE = re.compile(r"^(?:a|an|the)\s+")
-_ENTRY_KEYS = {"name", "prompts", "synonyms", "size", "model", "color"}
+_ENTRY_KEYS = {"name", "prompts", "synonyms", "size", "spread", "on_floor", "model", "color"}
 _REQUIRED_KEYS = ("name", "prompts", "size", "model", "color")
 
 
@@ -100,6 +103,10 @@ class CatalogEntry:
         model: Proxy model file name, relative to ``models_dir``.
         color: Display colour ``(r, g, b)``, 0..255.
         models_dir: Directory the model file lives in.
+        spread: Relative 1-sigma of real instances' ``(w, h, l)`` around ``size`` (people vary
+            little, cabinets a lot); :data:`DEFAULT_SPREAD` when the file gives none.
+        on_floor: Instances stand on the floor (their box bottom is a floor contact point; not
+            for things on tables or stacked).
     """
 
     name: str
@@ -109,6 +116,8 @@ class CatalogEntry:
     model: str
     color: RGB
     models_dir: Path = field(default=PROXY_DIR, repr=False, compare=False)
+    spread: Size = (0.2, 0.2, 0.2)
+    on_floor: bool = True
 
     @property
     def height(self) -> float | None:
@@ -363,6 +372,10 @@ def _parse_entry(index: int, raw: Any, models_dir: Path) -> CatalogEntry:
         raise CatalogError(f"{where}.prompts", "must list at least one detector prompt")
     synonyms = _strings(f"{where}.synonyms", raw.get("synonyms", []))
     size = _size(f"{where}.size", raw["size"])
+    spread = _spread(f"{where}.spread", raw.get("spread", list(DEFAULT_SPREAD)))
+    on_floor = raw.get("on_floor", True)
+    if not isinstance(on_floor, bool):
+        raise CatalogError(f"{where}.on_floor", f"must be true or false, got {on_floor!r}")
 
     model = raw["model"]
     if not isinstance(model, str) or not model.strip():
@@ -383,6 +396,8 @@ def _parse_entry(index: int, raw: Any, models_dir: Path) -> CatalogEntry:
         model=model,
         color=color,
         models_dir=models_dir,
+        spread=spread,
+        on_floor=on_floor,
     )
 
 
@@ -394,6 +409,20 @@ def _strings(path: str, value: Any) -> tuple[str, ...]:
         if not isinstance(item, str) or not item.strip():
             raise CatalogError(f"{path}[{i}]", f"must be a non-empty string, got {item!r}")
     return tuple(value)
+
+
+def _spread(path: str, value: Any) -> Size:
+    """A relative size spread ``[s_w, s_h, s_l]``: three finite numbers within 0..2."""
+    if not isinstance(value, list) or len(value) != 3:
+        raise CatalogError(path, f"must be [s_w, s_h, s_l] (relative 1-sigma), got {value!r}")
+    out = []
+    for i, v in enumerate(value):
+        if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
+            raise CatalogError(f"{path}[{i}]", f"must be a finite number, got {v!r}")
+        if not 0 <= v <= 2:
+            raise CatalogError(f"{path}[{i}]", f"must be within 0..2 (a relative spread), got {v!r}")
+        out.append(float(v))
+    return (out[0], out[1], out[2])
 
 
 def _size(path: str, value: Any) -> Size | None:

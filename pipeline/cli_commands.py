@@ -36,6 +36,7 @@ def _config(args: argparse.Namespace) -> MapperConfig:
         handle_truncation=not (paper or args.no_uncut_sides),
         fit_depth=not (paper or args.no_depth_fit),
         yaw_from_depth=False if paper else None,
+        ground_contact=not getattr(args, "no_ground_contact", False),
     )
 
 
@@ -50,9 +51,13 @@ def _add_common(p: argparse.ArgumentParser) -> None:
                    help="onnxruntime threads per model (default: 1 for YOLOX-Nano and FastDepth, every core for the rest)")
     g.add_argument("--placement", choices=("box_fit", "ray"), default="box_fit",
                    help="box_fit: fit the 3D box to the 2D box under gravity (default); ray: the paper's f*h/h_px")
-    g.add_argument("--fusion", choices=("adaptive", "fixed"), default="adaptive",
-                   help="adaptive: weigh the depth map by its agreement with the size priors on the image and drop "
-                        "depth readings that contradict them (default); fixed: the --w-* weights (the paper)")
+    g.add_argument("--fusion", choices=("sigma", "adaptive", "fixed"), default="sigma",
+                   help="sigma: each cue (size prior, ground contact, depth) gives a distance and a sigma, fused by "
+                        "inverse variance with outlier rejection (default); adaptive: weigh the depth map by its "
+                        "agreement with the size priors on the image and drop depth readings that contradict them; "
+                        "fixed: the --w-* weights (the paper)")
+    g.add_argument("--no-ground-contact", action="store_true",
+                   help="sigma fusion without ground-contact ranging (the floor under the box bottom)")
     g.add_argument("--w-geometric", type=float, default=0.8, help="fusion weight of the size-prior distance (0.8)")
     g.add_argument("--w-depth", type=float, default=0.2, help="fusion weight of the depth-map distance (0.2)")
     g.add_argument("--no-uncut-sides", action="store_true",

@@ -113,6 +113,9 @@ class SceneObject:
             :attr:`is_pinned`, which also counts ``source.method == "manual"``).
         history: The observations fused into it, oldest first (see :mod:`pipeline.map_fusion`).
         flags: Corrections made by the map fusion, for the operator (``set on the floor: ...``).
+        sigma: The mapper's 1-sigma [m] of the centre along the camera ray (inverse-variance fusion of
+            its distance cues, :mod:`pipeline.fusion`), ``None`` when not estimated.
+        cut: Sides of the 2D box the image border cuts (``left``, ``top``, ``right``, ``bottom``).
     """
 
     id: str
@@ -127,6 +130,8 @@ class SceneObject:
     pinned: bool = False
     history: tuple[Sighting, ...] = ()
     flags: tuple[str, ...] = ()
+    sigma: float | None = None
+    cut: tuple[str, ...] = ()
 
     @property
     def is_pinned(self) -> bool:
@@ -297,6 +302,10 @@ def _fusion_to_dict(o: SceneObject) -> dict[str, Any]:
         out["pinned"] = True
     if o.flags:
         out["flags"] = list(o.flags)
+    if o.sigma is not None:
+        out["sigma"] = round(o.sigma, 4)
+    if o.cut:
+        out["cut"] = list(o.cut)
     if o.history:
         out["history"] = [
             {"capture": h.capture, "position": [round(v, 4) for v in h.position], "yaw": round(h.yaw, 5),
@@ -334,7 +343,12 @@ def _fusion_from(r: _Reader) -> dict[str, Any]:
             size=cast(Vec3, h.vector("size", 3, positive=True)), sigma=cast(Vec3, h.vector("sigma", 3, positive=True)),
             camera=cast("Vec3 | None", h.vector("camera", 3, required=False)),
             distance=h.number("distance", required=False, lo=0.0), used=True if used is None else used, note=note))
-    return {"pinned": bool(pinned), "flags": tuple(flags), "history": tuple(history)}
+    sigma = r.number("sigma", required=False, positive=True)
+    cut = r.raw("cut", required=False) or []
+    if not isinstance(cut, list) or not all(c in ("left", "top", "right", "bottom") for c in cut):
+        raise SceneError(r._p("cut"), f"must be a list of 'left', 'top', 'right', 'bottom', got {cut!r}")
+    return {"pinned": bool(pinned), "flags": tuple(flags), "history": tuple(history), "sigma": sigma,
+            "cut": tuple(cut)}
 
 
 def scene_to_dict(scene: Scene) -> dict[str, Any]:

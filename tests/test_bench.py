@@ -194,7 +194,7 @@ def test_cli_mapping_options_reach_the_mapper_config() -> None:
 
     full = config()
     assert (full.placement, full.fusion, full.handle_truncation, full.fit_depth, full.yaw_from_depth) == \
-        ("box_fit", "adaptive", True, True, None)
+        ("box_fit", "sigma", True, True, None)
     paper = config("--paper")
     assert (paper.placement, paper.fusion, paper.handle_truncation, paper.fit_depth, paper.yaw_from_depth) == \
         ("ray", "fixed", False, False, False)
@@ -202,3 +202,5 @@ def test_cli_mapping_options_reach_the_mapper_config() -> None:
     one = config("--no-depth-fit")
     assert not one.fit_depth and one.handle_truncation and one.placement == "box_fit"
     assert not config("--no-uncut-sides").handle_truncation
+    assert config().ground_contact and not config("--no-ground-contact").ground_contact
+    assert config("--fusion", "adaptive").fusion == "adaptive"

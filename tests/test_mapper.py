@@ -138,7 +138,10 @@ def test_objects_land_at_their_world_positions(placement: str) -> None:
         assert o.source.distances["fused"] == pytest.approx(o.source.positions["camera"][2])
     assert objs["crate"].size == (0.8, 1.0, 0.6) and objs["crate"].size_known
     assert objs["crate"].source.method == "fused"
-    assert objs["rock"].source.method == "depth" and not objs["rock"].size_known
+    # the rock (unknown size) stands on the floor: depth and its floor contact, fused
+    assert objs["rock"].source.method == "fused" and not objs["rock"].size_known
+    rock = next(o for o in result.objects if o.detection.label == "rock")
+    assert {c.name for c in rock.cues} == {"ground_contact", "depth"}
     assert objs["rock"].source.distances["geometric"] is None
     assert 0.3 < objs["rock"].size[0] < 0.9  # measured from the mask at its depth
     assert objs["barrel"].source.mask_area == int(SCENE["masks"][1].sum())
@@ -177,10 +180,18 @@ def test_relative_inverse_depth_becomes_metric_from_the_known_objects() -> None:
 
 def test_relative_depth_without_reference_objects_places_nothing() -> None:
     only_rock = GroundTruthBundle(GroundTruthDetector([SCENE["boxes"][2]], ["rock"]), None, InverseDepth())
-    with Mapper(only_rock, CATALOG) as mapper:
+    with Mapper(only_rock, CATALOG, MapperConfig(ground_contact=False)) as mapper:
         result = mapper.run(SCENE["image"], INTR, MOUNT, ROBOT)
     assert result.scene.objects == ()
     assert result.objects[0].skipped and "no distance" in result.objects[0].skipped
+    # with the camera height known, the rock standing on the floor is placed from its floor contact
+    with Mapper(only_rock, CATALOG) as mapper:
+        result = mapper.run(SCENE["image"], INTR, MOUNT, ROBOT)
+    (rock,) = result.scene.objects
+    assert rock.source.method == "ground_contact"
+    true = np.array(OBJECTS[2][1])
+    assert np.linalg.norm(np.array(rock.position) - true) < 0.1 * np.linalg.norm(true - WORLD_FROM_CAM.translation)
+    assert rock.sigma is not None and rock.sigma > 0
 
 
 def test_segment_auto_runs_the_segmenter_only_for_objects_that_need_a_mask() -> None:
