@@ -1,4 +1,4 @@
-"""The layer-aware A* heuristic: an exact-by-construction lower bound built per goal in 2D.
+"""The layer-aware A* heuristic: a per-goal lower bound from 2D tables, admissible and consistent.
 
 Grid ``cost[nx, ny, nz]`` as in :mod:`planner.astar` (per-cell cost [1/m], ``inf`` impassable,
 ``k = 0`` ground); an edge ``a -> b`` costs ``res * len * (c_a + c_b) / 2`` with
@@ -40,15 +40,28 @@ and ``((√3+√2-3)/(√2-1), 1-a)`` (checked on the five move shapes). Hence
   ``hF = max(hA, D2 + res mf max_(a,b) (a dW_T + b |z - T|) + S(T) - S(zg))``,
   ``h_T = min(hL, hF)`` there, ``hA`` elsewhere; ``h = max(octile bound, hA, max_T h_T)``.
 
-*Admissible*: each term is a lower bound of every path (of its class). *Consistent*: for one
-move ``a -> b`` of cost ``e``, ``D2(q) - D2(q') <= res h π̄`` (Dijkstra's triangle inequality),
-``S`` terms change by at most the vertical credit (``R(q) <= max(zlo(q), R(q'))`` and
-``z >= zlo(q)``; see :func:`planner.astar.astar`), ``dW_T`` and ``|z - T|`` are 1-Lipschitz, so
-each of ``hA``, ``hL``, the second term of ``hF`` drops by at most its share of ``e``; a move that
-leaves the region ``{z >= 2, q ∉ Ω_T}`` starts next to ``Ω_T`` (``dW_T = 0``, so ``hF = hA``) or
-goes down to layer 1 (``hL`` drops by ``P(1)`` at most). A min or max of consistent functions is
-consistent. ``tests/test_heuristic.py`` checks ``h(a) <= e + h(b)`` on every edge and
-``h <= true cost-to-go`` on random and structured grids.
+*Admissible*: each term is a lower bound of every path (of its class; the classes cover all
+paths). *Consistent*, i.e. ``h(a) <= e + h(b)`` for a move ``a = (q, z) -> b = (q', z')`` of cost
+``e`` (horizontal ``h``, vertical ``v``):
+
+- ``D2(q) - D2(q') <= res h π̄`` (triangle inequality of the 2D Dijkstra; 0 when ``h = 0``).
+- ``hA``: ``R(q) <= max(zlo(q), R(q'))`` (minimax) and ``z >= zlo(q)`` give
+  ``H(a) <= max(z, R(q'), zg)``. Flat move: ``H(a) <= H(b)``. Climb: ``H(a) <= H(b)`` and
+  ``S(z + 1) - S(z) = P(z)``. Descent: ``H(b) >= z`` gives ``H(a) <= H(b)``, else ``H(b) = z - 1``
+  and ``H(a) <= z``. In every case the ``S`` part drops by at most the move's vertical credit, so
+  ``hA(a) - hA(b) <= e``.
+- Inside ``{z >= 2, q ∉ Ω_T}`` (moves between air cells, ``c̄ >= mf``): ``hL`` drops by at most
+  ``res h π̄ + v P``, the second term of ``hF`` by at most ``res h π̄ + res mf (a h + b v)``
+  (``dW_T`` and ``|z - T|`` are 1-Lipschitz), both ``<= e``.
+- Leaving that region into ``Ω_T``: ``q`` is next to ``Ω_T``, ``dW_T(q) = 0``, and since
+  ``b <= 0.65 < 1`` and ``P(j) >= res mf`` for ``j >= 2``, ``hF(a) = hA(a)``. Down to layer 1:
+  if ``R(q') >= T``, ``hL(a) - hA(b) <= D2(q) - D2(q') + P(1) <= e``; otherwise ``q' ∈ Ω_T`` and
+  again ``hF(a) = hA(a)``. Entering the region: ``h_T(b) >= hA(b)``.
+- The octile bound is consistent (:func:`planner.astar.astar`); a min or max of consistent
+  functions is consistent.
+
+``tests/test_heuristic.py`` checks ``h(a) <= e + h(b)`` on every edge and ``h <=`` the true
+cost-to-go on random and aerial-ground grids.
 
 The search multiplies ``h`` by ``1 - 1e-9`` (still consistent) as a margin for rounding.
 """
