@@ -10,10 +10,11 @@ is 0). As in MCP, any of the 26 moves is allowed when its destination is passabl
 
 The heuristic is first ``min_cost * resolution * octile(a, goal)`` where ``octile`` is the 3D
 octile distance (in cells) and ``min_cost`` the smallest finite cost in the grid. When that is not
-enough (more than :func:`default_layer_budget` expansions, typically when the only way is to fly), the search builds the per-goal layer-aware heuristic of :mod:`planner.heuristic` and
+enough (more than :func:`default_layer_budget` expansions, typically when the only way is to
+fly), the search builds the per-goal layer-aware heuristic of :mod:`planner.heuristic` and
 continues with it (the open list re-keyed; the closed cells kept).
 
-The compiled kernel (numba) keeps flat C-order indices in an indexed binary heap (each open cell
+The compiled kernel (numba, :mod:`planner.astar_kernel`) keeps flat C-order indices in an indexed binary heap (each open cell
 once, decrease-key through a cell -> heap-slot map; measured about 2x faster than lazy deletion,
 which pops every stale duplicate through a deeper heap). The per-cell buffers (g-scores, parent
 moves, heap slots, open/closed stamps) live in an :class:`AStarSearcher` and are reused between
