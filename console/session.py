@@ -404,7 +404,7 @@ class Session(Persistence, Undo, OperatorRules):
             self._outbox.append(Notice(
                 "Route segments removed",
                 f"{label}: registered {segs} (to {to}) now cross obstacles and were removed"
-                + ("; the mission was retired" if had_mission else "") + ". Undo brings them back.", "warning"))
+                + ("; the mission was retired" if had_mission and self._mission is None else "") + ". Undo brings them back.", "warning"))
         if self._selected is not None and self._selected not in {o.id for o in scene.objects}:
             self._selected = None
         self._save_locked()
