@@ -70,6 +70,8 @@ class Recorder:
         self._last_pose = -1e18
         self._last_state = -1e18
         self._state_key: Any = None
+        self._run_key: Any = None
+        self._run_at = -1e18
         self._failed: str | None = None
         self.dropped = 0
         self.cpu_seconds = 0.0  # CPU spent by the listener and the writer thread [s] (bench/recording_overhead.py)
@@ -152,7 +154,13 @@ class Recorder:
             self._put(ROUTE, (s.route_snapshot(), s.mission))
         elif topic == MISSION:
             self._put(MISSION, (s.route_snapshot(), s.mission))
-        elif topic in (CAPTURE, RUN, NOTICE):
+        elif topic == RUN:
+            key = (payload.state, payload.segment, payload.message)
+            now = time.monotonic()
+            if key != self._run_key or now - self._run_at >= 0.5:  # progress alone: at most 2 Hz
+                self._run_key, self._run_at = key, now
+                self._put(RUN, payload)
+        elif topic in (CAPTURE, NOTICE):
             self._put(topic, payload)
         elif topic == JOB and payload is not None and not payload.running:
             self._put(JOB, payload)

@@ -86,13 +86,15 @@ class ReplaySession(Session):
             if rs.MISSION_JSON in changed:
                 self._mission = state.mission
                 events.append((MISSION, None))
-            if rs.CAPTURE_META in changed and state.capture is not None:
-                self._capture = state.capture
-                events.append((CAPTURE, state.capture))
-            if (rs.ROBOT_STATE in changed or rs.POSE in changed) and state.robot is not None:
-                # the report's age as it was at the shown time (the views compare stamps with the clock)
-                self._robot = replace(state.robot, stamp=time.time() - (state.time / 1e9 - state.robot.stamp))
-                events.append((ROBOT, self._robot))
+            if rs.CAPTURE_META in changed:
+                self._capture = state.capture  # None before the first capture (the camera panel keeps its last photo)
+                if state.capture is not None:
+                    events.append((CAPTURE, state.capture))
+            if rs.ROBOT_STATE in changed or rs.POSE in changed:
+                self._robot = None if state.robot is None else replace(  # its age as it was at the shown time
+                    state.robot, stamp=time.time() - (state.time / 1e9 - state.robot.stamp))
+                if self._robot is not None:
+                    events.append((ROBOT, self._robot))
             if rs.PROGRESS in changed:
                 self._run = state.run
                 events.append((RUN, state.run))

@@ -71,6 +71,8 @@ def test_replay_restores_the_scene_at_a_captures_time(recorded: Any, replay: Any
     replay.seek(replay.recording.duration)  # the end: the live session's last map, the mission done
     assert {o.id for o in session.scene.objects} == {o.id for o in live.scene.objects}
     assert session.run.state == "done"
+    replay.seek(0.0)  # and back to the start: no photo, an empty map again
+    assert session.capture is None and session.scene.objects == () and session.run.state == "idle"
 
 
 def test_replay_plays_to_the_end(recorded: Any, replay: Any) -> None:
