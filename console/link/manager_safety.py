@@ -93,7 +93,7 @@ class SafetyMixin:
 
     def _robot_now(self) -> str:
         """What the robot is really doing, from a fresh state sample (waits briefly for one)."""
-        end = time.monotonic() + 1.0
+        end = time.monotonic() + 2.0
         st = self.link.latest_state()
         while (st is None or not (st.link_ok and st.position_valid)) and time.monotonic() < end:
             time.sleep(self.poll)
