@@ -176,6 +176,15 @@ def test_refused_set_message_interval_falls_back_to_request_data_stream_and_retr
         assert len(emu.record.data_streams) > asked
 
 
+def test_an_unanswered_set_message_interval_also_asks_with_request_data_stream() -> None:
+    """Fault 3, neighbour: no ACK at all (a router dropping COMMAND_LONG): each round also sends
+    REQUEST_DATA_STREAM, so the streams flow."""
+    with vehicle(faults={"ignore_commands": {mav.MAV_CMD_SET_MESSAGE_INTERVAL}, "streams_need_request": True}) \
+            as (link, emu):
+        assert link.latest_state().health == "ok" and emu.record.data_streams
+        assert link.streams.method == "interval"  # not refused: keeps trying the checked request first
+
+
 # --- 4 / 5. identity -----------------------------------------------------------------------------
 
 
