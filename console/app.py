@@ -91,6 +91,8 @@ class ConsoleConfig:
         link_options: Extra keyword options for :func:`console.link.open_link` (e.g. a MAVLink
             ``config`` with the NED frame and the ground-motion command set).
         record: Record the session as MCAP in ``<session>/recordings`` (:mod:`console.recording`).
+        foxglove_port: Also serve the recorded topics live over the Foxglove WebSocket protocol on
+            127.0.0.1 at this port (0 = any free port), or ``None`` (off).
     """
 
     robot: str = "sim"
@@ -107,6 +109,7 @@ class ConsoleConfig:
     failsafe_hold: float = 5.0
     link_options: Mapping[str, Any] = field(default_factory=dict)
     record: bool = True
+    foxglove_port: int | None = None
 
 
 class ConsoleApp:
@@ -157,7 +160,7 @@ class ConsoleApp:
             restored = session.restore_last()
         from .recording import start_recording  # mission log (MCAP) in the session folder, closed last
 
-        self.recorder = start_recording(session) if cfg.record else None
+        self.recorder = start_recording(session, foxglove_port=cfg.foxglove_port) if cfg.record else None
         if self.recorder is not None:
             self._closers.append(self.recorder.close)
         perceiver = self._perceiver_override or self._choose_perceiver()

@@ -134,6 +134,9 @@ def add_console_parser(subparsers: argparse._SubParsersAction) -> argparse.Argum
     p.add_argument("--no-record", dest="record", action="store_false",
                    help="do not record the session (by default every run is recorded as MCAP in <session>/recordings; "
                         "morphonavi replay FILE.mcap shows it again)")
+    p.add_argument("--foxglove-ws", dest="foxglove_port", type=_port, default=None, metavar="PORT",
+                   help="also serve the recorded topics live to the Foxglove app (Foxglove WebSocket protocol) on "
+                        "127.0.0.1:PORT; off by default")
     p.add_argument("--host", default="127.0.0.1",
                    help="interface to listen on (default 127.0.0.1: this machine only). Anything else lets "
                         "whoever reaches the port drive the robot: there is no login")
@@ -184,6 +187,8 @@ def cmd_console(args: argparse.Namespace) -> int:
                         datefmt="%H:%M:%S")
     for noisy in ("websockets", "websockets.server", "httpx"):
         logging.getLogger(noisy).setLevel(logging.WARNING)
+    if args.foxglove_port is not None and not args.record:
+        raise CliError("--foxglove-ws serves what is recorded: drop --no-record")
     if args.captures is not None and not Path(args.captures).is_dir():
         raise CliError(f"--captures {args.captures}: no such folder")
     if args.models is not None and not Path(args.models).is_dir():
@@ -197,7 +202,7 @@ def cmd_console(args: argparse.Namespace) -> int:
         session_dir=args.session, host=args.host, port=args.port, models=args.models, fresh=args.fresh,
         resolution=args.resolution, margin=args.margin, captures=photo_source(args),
         failsafe_after=args.failsafe_after, failsafe_hold=args.failsafe_hold, link_options=link_options(args),
-        record=args.record,
+        record=args.record, foxglove_port=args.foxglove_port,
     )
     try:
         lock = SessionLock(args.session).acquire()

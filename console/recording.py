@@ -48,10 +48,11 @@ class Recorder:
         max_bytes: Size [bytes] past which the next part starts.
         pose_hz: Robot pose / tf messages per second at most.
         state_hz: Robot state JSON messages per second at most (changes of mode etc. always).
+        live: A :class:`~console.recording_live.LiveView` that gets every message too (closed with the recorder).
     """
 
     def __init__(self, session: Any, folder: str | Path | None = None, max_bytes: int = MAX_BYTES,
-                 pose_hz: float = 10.0, state_hz: float = 2.0) -> None:
+                 pose_hz: float = 10.0, state_hz: float = 2.0, live: Any = None) -> None:
         if not (isinstance(max_bytes, int) and max_bytes > 0):
             raise ValueError(f"max_bytes: must be a positive whole number of bytes, got {max_bytes!r}")
         for name, hz in (("pose_hz", pose_hz), ("state_hz", state_hz)):
@@ -74,6 +75,7 @@ class Recorder:
         self._run_at = -1e18
         self._failed: str | None = None
         self.dropped = 0
+        self.live = live
         self.cpu_seconds = 0.0  # CPU spent by the listener and the writer thread [s] (bench/recording_overhead.py)
         self.paths: list[Path] = []
         self.counts: dict[str, int] = {}
@@ -119,6 +121,8 @@ class Recorder:
             self._thread = None
         if self.dropped:
             log.warning("recording: %d robot states dropped (the writer fell behind)", self.dropped)
+        if self.live is not None:
+            self.live.close()
 
     # --- listener (runs on the thread that changed the session: cheap) -----------------------------
     def _put(self, topic: str, payload: Any, droppable: bool = False) -> None:
@@ -261,7 +265,9 @@ class Recorder:
             self._channels[topic] = cid
         return cid
 
-    def _emit(self, topic: str, ns: int, data: bytes) -> None:
+    def _emit(self, topic: str, ns: int, data: bytes, live: bool = True) -> None:
+        if live and self.live is not None:
+            self.live.log(topic, ns, data)
         if self._writer is None:
             self._open()
         self._writer.add_message(self._channel(topic), log_time=ns, data=data, publish_time=ns)
@@ -332,7 +338,7 @@ class Recorder:
         now = max(ns for ns, _ in self._latest.values())
         for topic in _STATE_TOPICS:  # the new part opens on its own: the current state first, stamped now
             if topic in self._latest:
-                self._emit(topic, now, self._latest[topic][1])
+                self._emit(topic, now, self._latest[topic][1], live=False)
 
     def _finish(self) -> None:
         if self._writer is not None:
@@ -346,6 +352,16 @@ class Recorder:
                 stream.close()
 
 
-def start_recording(session: Any, folder: str | Path | None = None, **options: Any) -> Recorder:
-    """Start a :class:`Recorder` on ``session`` (stop it with its ``close``)."""
-    return Recorder(session, folder, **options).start()
+def start_recording(session: Any, folder: str | Path | None = None, foxglove_port: int | None = None,
+                    **options: Any) -> Recorder:
+    """Start a :class:`Recorder` on ``session`` (stop it with its ``close``).
+
+    ``foxglove_port``: also serve the topics live over the Foxglove WebSocket protocol on
+    127.0.0.1 (:mod:`console.recording_live`); ``OSError`` if the port is taken.
+    """
+    live = None
+    if foxglove_port is not None:
+        from .recording_live import LiveView
+
+        live = LiveView(foxglove_port)
+    return Recorder(session, folder, live=live, **options).start()

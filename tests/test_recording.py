@@ -275,3 +275,51 @@ def test_no_record_turns_the_recording_off(tmp_path: Path) -> None:
     finally:
         app.stop()
     assert not (tmp_path / "session" / "recordings").exists()
+
+
+def test_the_live_view_serves_the_topics_over_the_foxglove_websocket_protocol(tmp_path: Path) -> None:
+    import base64
+    import struct
+
+    from mcap.records import Schema
+    from websockets.sync.client import connect
+
+    from console.cli import main
+
+    assert main(["console", "--no-record", "--foxglove-ws", "0", "--session", str(tmp_path / "x")]) == 2
+    app = ConsoleApp(ConsoleConfig(session_dir=tmp_path / "session", scene_dir=tmp_path / "scenes", port=0, fresh=True,
+                                   foxglove_port=0)).start()
+    snaps: list[RobotSnapshot] = []
+    try:
+        session = app.session
+        assert session is not None and app.recorder is not None and app.recorder.live is not None
+        session.subscribe(lambda t, p: snaps.append(p) if t == ROBOT else None)
+        session.spawn(Scene(objects=(SceneObject("a", "office_chair", (2.0, 3.0, 0.5), (0.6, 1.0, 0.6)),)), "test")
+        port = app.recorder.live.port
+        with connect(f"ws://127.0.0.1:{port}", subprotocols=["foxglove.sdk.v1"], open_timeout=20) as ws:
+            channels: dict[str, Any] = {}
+            while "/map/objects" not in channels or "/robot/pose" not in channels:
+                msg = json.loads(ws.recv(timeout=20))
+                if msg["op"] == "advertise":
+                    channels.update({c["topic"]: c for c in msg["channels"]})
+            assert channels["/robot/pose"]["schemaName"] == "foxglove.PoseInFrame"
+            assert channels["/map/objects"]["schemaName"] == "foxglove.SceneUpdate"
+            ws.send(json.dumps({"op": "subscribe", "subscriptions": [
+                {"id": 1, "channelId": channels["/map/objects"]["id"]}, {"id": 2, "channelId": channels["/robot/pose"]["id"]}]}))
+            decoders = {sub: DecoderFactory().decoder_for("protobuf", Schema(
+                id=sub, name=channels[t]["schemaName"], encoding="protobuf", data=base64.b64decode(channels[t]["schema"])))
+                for sub, t in ((1, "/map/objects"), (2, "/robot/pose"))}
+            got: dict[int, Any] = {}
+            while len(got) < 2:
+                frame = ws.recv(timeout=20)
+                if isinstance(frame, bytes) and frame[0] == 1:  # message data: op, subscription, time, payload
+                    sub = struct.unpack_from("<I", frame, 1)[0]
+                    got[sub] = decoders[sub](frame[13:])
+        # the map as it is (sent at once on subscribing), a robot pose the session announced
+        assert [e.id for e in got[1].entities] == ["object/a"]
+        pose = got[2]
+        match = [s for s in snaps if round(s.stamp * 1e9) == pose.timestamp.ToNanoseconds()]
+        assert match and match[0].pose.translation == pytest.approx(
+            (pose.pose.position.x, pose.pose.position.y, pose.pose.position.z), abs=1e-9)
+    finally:
+        app.stop()
