@@ -252,6 +252,11 @@ class Ranger:
             return EXACT_DEPTH_SIGMA, f"sigma: exact depth ({EXACT_DEPTH_SIGMA:.1%}: the placement from it)", True
         values, surfaces = self._references(objects)
         spread = depth_fit_spread(values, surfaces, scale)
+        if spread is not None:  # the robust spread hides a tail (an indoor model saturating outdoors): RMS too
+            z = np.asarray(scale.to_metric(np.asarray(values)), dtype=np.float64)
+            ok = np.isfinite(z) & (z > 0)
+            res = np.log(np.asarray(surfaces)[ok] / z[ok])
+            spread = max(spread, float(np.sqrt(np.mean((res - np.median(res)) ** 2))))
         if spread is None:
             return cfg.depth_sigma, (f"sigma: depth map unverified ({len(values)} reference objects, 3 needed): "
                                      f"{cfg.depth_sigma:.0%}"), False
