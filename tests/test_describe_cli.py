@@ -126,3 +126,19 @@ def test_plan_goal_object_errors(argv: list[str], message: str, room: Path, tmp_
     code, _, err = _run(capsys, "plan", str(room), "--start", "2.5,0.7,0", "--out", str(tmp_path / "m.json"), *argv)
     assert code == 2 and message in err and "Traceback" not in err
     assert not (tmp_path / "m.json").exists()
+
+
+def test_describe_piped_into_a_reader_that_leaves_early_prints_no_traceback(room: Path) -> None:
+    """``morphonavi describe --json | head -1``: the reader closing the pipe is not an error."""
+    import subprocess
+    import sys
+
+    code = ("import sys; from console.cli import main; sys.exit(main(['describe', sys.argv[1], '--json', "
+            "'--robot', '2.5,0.7,0,90']))")
+    proc = subprocess.Popen([sys.executable, "-c", code, str(room)], stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    assert proc.stdout is not None and proc.stderr is not None
+    first = proc.stdout.read(1)  # read one byte, then leave as `head -c 1` does
+    proc.stdout.close()
+    err = proc.stderr.read().decode()
+    assert proc.wait(timeout=120) == 0, err
+    assert first == b"{" and "Traceback" not in err and "BrokenPipeError" not in err, err
