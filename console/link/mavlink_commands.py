@@ -142,7 +142,7 @@ class Commander:
         if cancel is not None and cancel.is_set():
             raise Stopped()
         raise LinkTimeout(f"{what}: no COMMAND_ACK from the vehicle after {sent} attempt(s) "
-                          f"({self.ack_timeout:.1f} s each)")
+                          f"({self.ack_timeout:g} s each)")
 
     def _wait_ack(self, command: int, cancel: threading.Event | None) -> tuple[Any, float] | None:
         mav = mavutil().mavlink
