@@ -234,10 +234,31 @@ LIGHT_MODELS = frozenset({"yolox_nano", "fastdepth"})
 """Models that take tens of milliseconds: one thread each leaves the cores to the segmenter's encoder."""
 
 
+SECOND_DETECTORS = ("oidv4_ssd",)
+"""Detectors that can run beside a set's own (``--models offline+oidv4_ssd``), merged class-aware."""
+
+
+def _with_second_detector(det: Any, name: str, model_dir: str | os.PathLike[str] | None, catalog: Catalog) -> Any:
+    """``det`` merged with the second detector ``name`` (:class:`pipeline.models.ssd.MergedDetector`)."""
+    from pipeline.models.base import ModelMissingError
+    from pipeline.models.registry import search_dirs
+    from pipeline.models.ssd import MergedDetector, SsdDetector
+
+    if name not in SECOND_DETECTORS:
+        raise MapperError(f"--models ...+{name}: unknown second detector (known: {', '.join(SECOND_DETECTORS)})")
+    folder = next((d / name for d in search_dirs(model_dir) if (d / name / f"{name}.onnx").is_file()), None)
+    if folder is None:
+        raise ModelMissingError(name, f"no {name}/{name}.onnx in {', '.join(str(d) for d in search_dirs(model_dir))}")
+    second = SsdDetector.from_dir(folder, threads=1, name=name)
+    second.label_map = {l: e.name for l in second.labels[1:] if (e := catalog.lookup(l)) is not None}
+    return MergedDetector(det, second)
+
+
 def load_mapping_models(
     set_name: str, model_dir: str | os.PathLike[str] | None, catalog: Catalog, threads: int | None = None
 ) -> Any:
-    """The model set's bundle for the mapper.
+    """The model set's bundle for the mapper; ``set+oidv4_ssd`` adds the Open Images SSD beside the set's
+    detector (both run, detections merged class-aware, :mod:`pipeline.models.ssd`).
 
     A closed-vocabulary detector's labels are mapped to catalog classes (``tvmonitor`` -> ``monitor``,
     ``diningtable`` -> ``table``; labels without a class are ignored). Threads: the mapper runs the
@@ -247,6 +268,7 @@ def load_mapping_models(
     """
     from pipeline.models.loader import ModelBundle, load_model, present_set_members
 
+    set_name, _, extra = set_name.partition("+")
     names = present_set_members(set_name, model_dir)
     det_name, seg_name, depth_name = names
 
@@ -262,6 +284,8 @@ def load_mapping_models(
             if entry is not None:
                 mapping[label] = entry.name
         det.label_map = mapping
+    if extra:
+        det = _with_second_detector(det, extra, model_dir, catalog)
     return ModelBundle(
         detector=det,
         segmenter=load_model(seg_name, model_dir, threads=threads),
