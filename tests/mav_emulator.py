@@ -91,14 +91,16 @@ class ArduCopterEmulator:
         start_ned: Initial position (NED) [m].
         system: MAVLink system id.
         reboot_silence: How long a reboot keeps the vehicle silent [s].
+        url: Another pymavlink connection instead of UDP to ``gcs_port`` (``tcpin:127.0.0.1:PORT``:
+            the vehicle listens on TCP like SITL's serial port 0).
     """
 
     def __init__(self, gcs_port: int, *, walk_speed: float = 2.0, fly_speed: float = 4.0,
                  climb_rate: float = 3.0, descent_rate: float = 3.0, accel: float = 50.0, brake_decel: float = 50.0,
                  heartbeat_rate: float = 5.0, telemetry_rate: float = 25.0, drop: float = 0.0, seed: int = 1,
                  start_ned: tuple[float, float, float] = (0.0, 0.0, 0.0), system: int = 1,
-                 reboot_silence: float = 0.5) -> None:
-        self.conn = mavutil.mavlink_connection(f"udpout:127.0.0.1:{gcs_port}", source_system=system,
+                 reboot_silence: float = 0.5, url: str | None = None) -> None:
+        self.conn = mavutil.mavlink_connection(url or f"udpout:127.0.0.1:{gcs_port}", source_system=system,
                                                source_component=1)
         self.system = system
         self.walk_speed, self.wpnav_speed = walk_speed, fly_speed
@@ -169,6 +171,15 @@ class ArduCopterEmulator:
 
     def __exit__(self, *exc: object) -> None:
         self.stop()
+
+    def drop_client(self) -> None:
+        """With ``url="tcpin:..."``: close the GCS's TCP connection (it may connect again)."""
+        with self.lock:
+            port = getattr(self.conn, "port", None)
+            if port is not None:
+                port.close()
+                self.conn.port = None
+                self.conn.fd = self.conn.listen.fileno()
 
     def reboot(self) -> None:
         """Restart like ArduPilot: silent, then new boot time, rates forgotten, origin where it stands."""

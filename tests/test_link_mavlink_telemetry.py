@@ -5,6 +5,7 @@ refused, vehicle identity (gimbal / camera first, system ids), readiness, the .t
 from __future__ import annotations
 
 import math
+import socket
 import time
 
 import pytest
@@ -12,6 +13,8 @@ from pymavlink import mavutil
 
 from console.link.base import Mode, RunStatus
 from console.link.manager import MissionStatus
+from console.link.mavlink import MavlinkLink
+from mav_emulator import ArduCopterEmulator
 from mav_helpers import ORIGIN, config, eventually, events, mission_manager, vehicle
 from planner.mission import Mission, MissionSegment, SegmentKind
 
@@ -156,6 +159,31 @@ def test_a_reboot_is_detected_streams_come_back_and_the_origin_change_is_warned(
         assert f"vehicle rebooted ({why}" in message or f"vehicle {why}" in message, message
         # the twin now shows the new-origin pose: at the NED origin again, and the operator was told
         assert link.latest_state().position[:2] == pytest.approx(ORIGIN[:2], abs=0.05)
+
+
+def test_a_tcp_reconnect_is_detected_and_the_streams_are_asked_for_again() -> None:
+    """Fault 2, transport: the vehicle's TCP end drops the connection (SITL restarted, a router);
+    pymavlink reconnects with a new socket: the link counts a reconnect and re-requests the streams."""
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+    emu = ArduCopterEmulator(0, url=f"tcpin:127.0.0.1:{port}")
+    emu.streams_need_request = True
+    emu.start()
+    link = MavlinkLink(f"tcp:127.0.0.1:{port}", config())
+    try:
+        link.connect(timeout=5.0)
+        assert eventually(lambda: link.latest_state() is not None and link.latest_state().health == "ok")
+        asked = len(emu.record.intervals)
+        emu.drop_client()
+        emu.streaming = set()  # a restarted vehicle forgot the rates
+        assert eventually(lambda: link.latest_state().link_epoch >= 1, 10.0)
+        assert any("transport reconnected" in w for w in link.latest_state().warnings)
+        assert eventually(lambda: link.latest_state().health == "ok", 10.0)
+        assert len(emu.record.intervals) > asked
+    finally:
+        link.close()
+        emu.stop()
 
 
 # --- 3. stream requests --------------------------------------------------------------------------
