@@ -10,8 +10,10 @@ the next part ``...-002.mcap`` starts with the current state written again (stam
 the switch), so every part opens on its own. Robot state arrives at up to 50 Hz: pose and ``/tf`` are written at most ``pose_hz`` times
 a second, the state JSON at most twice a second or when its mode, arming, health or messages change.
 
-A folder that cannot be created or written, or a full disk, stops the recording with ONE notice to
-every operator; the console goes on.
+The data reach the file every ``FLUSH_S`` seconds at least (the current chunk is ended), so a console
+that is killed leaves a file without its footer that ``morphonavi replay --salvage`` still reads up to
+the last two seconds. A folder that cannot be created or written, or a full disk, stops the recording
+with ONE notice to every operator; the console goes on.
 
 Times are nanoseconds since the epoch (MCAP log time = when the session announced the change).
 """
@@ -34,6 +36,7 @@ log = logging.getLogger(__name__)
 
 RECORDINGS_DIR = "recordings"
 MAX_BYTES = 512 * 1024 * 1024  # rotate past this size [bytes]
+FLUSH_S = 2.0  # the data reach the file at least this often [s]
 QUEUE_SIZE = 4096  # announcements waiting for the writer; robot states are dropped first when full
 _STATE_TOPICS = (rs.SESSION_INFO, rs.SCENE_JSON, rs.MAP, rs.GRID, rs.ROUTE_JSON, rs.MISSION_JSON, rs.PATHS,
                  rs.CAPTURE_META, rs.IMAGE, rs.CALIBRATION, rs.DEPTH, rs.PROGRESS)
@@ -191,21 +194,31 @@ class Recorder:
 
     # --- writer thread ------------------------------------------------------------------------------
     def _run(self) -> None:
+        flushed = time.monotonic()
         while True:
-            item = self._queue.get()
+            try:
+                item = self._queue.get(timeout=FLUSH_S)
+            except queue.Empty:
+                item = ()
             if item is None:
                 break
             if self._failed is not None:
                 continue
             t0 = time.thread_time()
             try:
-                self._write_item(*item)
-                self._maybe_rotate()
+                if item:
+                    self._write_item(*item)
+                    self._maybe_rotate()
+                if self._writer is not None and time.monotonic() - flushed >= FLUSH_S:
+                    self._writer.flush()  # end the chunk: a killed console loses at most FLUSH_S of log
+                    self._stream.flush()
+                    flushed = time.monotonic()
             except OSError as exc:
                 self._fail(f"cannot write {self._current()}: {exc.strerror or exc}")
             except Exception as exc:  # an encoding bug must not take the console down
-                log.exception("recording: could not record %s", item[0])
-                self._fail(f"could not record {item[0]}: {exc}")
+                what = item[0] if item else "the file"
+                log.exception("recording: could not record %s", what)
+                self._fail(f"could not record {what}: {exc}")
             finally:
                 self.cpu_seconds += time.thread_time() - t0
         try:

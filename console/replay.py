@@ -61,6 +61,29 @@ class ReplayState:
     versions: dict[str, int]
 
 
+def _salvaged(f: Any) -> list[tuple[Any, Any, Any]]:
+    """``(schema, channel, message)`` of every whole record of a file cut short, in log-time order."""
+    from mcap.records import Channel, Message, Schema
+    from mcap.stream_reader import StreamReader
+
+    schemas: dict[int, Any] = {}
+    channels: dict[int, Any] = {}
+    out: list[tuple[Any, Any, Any]] = []
+    try:
+        for r in StreamReader(f).records:
+            if isinstance(r, Schema):
+                schemas[r.id] = r
+            elif isinstance(r, Channel):
+                channels[r.id] = r
+            elif isinstance(r, Message) and r.channel_id in channels:
+                ch = channels[r.channel_id]
+                out.append((schemas.get(ch.schema_id), ch, r))
+    except Exception:  # the cut: a record (or a chunk) that ends early; what came before is kept
+        pass
+    out.sort(key=lambda m: m[2].log_time)
+    return out
+
+
 class _Track:
     """Messages of one topic in time order: ``(log time [ns], payload)``."""
 
@@ -107,15 +130,21 @@ class Recording:
 
     Args:
         path: The ``.mcap`` file.
+        salvage: Read a file without its footer (a console that was killed) up to where it ends,
+            instead of refusing it; :attr:`salvaged` tells whether that happened.
     """
 
-    def __init__(self, path: str | Path) -> None:
+    def __init__(self, path: str | Path, salvage: bool = False) -> None:
         self.path = Path(path)
+        self.salvage = salvage
+        self.salvaged = False
         self._tracks: dict[str, _Track] = {}
         self.info: ReplayInfo | None = None
         self._capture_cache: tuple[int, CaptureRecord] | None = None
         self._read()
         if self.info is None:
+            if self.salvaged:
+                raise ReplayError(f"{self.path}: truncated before its first MorphoNavi message: nothing to salvage")
             raise ReplayError(f"{self.path}: not a MorphoNavi recording (no {rs.SESSION_INFO} message)")
         all_times = [t for tr in self._tracks.values() for t in tr.times]
         self.start, self.end = min(all_times), max(all_times)
@@ -150,10 +179,17 @@ class Recording:
                 if size >= 2 * len(MCAP_MAGIC):
                     f.seek(size - len(MCAP_MAGIC))
                 if size < 2 * len(MCAP_MAGIC) or f.read(len(MCAP_MAGIC)) != MCAP_MAGIC:
-                    raise ReplayError(f"{p}: truncated (no MCAP footer): the recording was not finished, "
-                                      "e.g. the console was killed or the disk filled up")
-                f.seek(0)
-                self._read_messages(f)
+                    if not self.salvage:
+                        raise ReplayError(f"{p}: truncated (no MCAP footer): the recording was not finished, e.g. the "
+                                          "console was killed or the disk filled up; --salvage reads what it holds")
+                    f.seek(0)
+                    self.salvaged = True
+                    self._read_messages(_salvaged(f))
+                else:
+                    from mcap.reader import make_reader
+
+                    f.seek(0)
+                    self._read_messages(make_reader(f).iter_messages(log_time_order=True))
         except ReplayError:
             raise
         except OSError as exc:
@@ -161,13 +197,12 @@ class Recording:
         except Exception as exc:  # the mcap reader's errors for a corrupt file have no common base
             raise ReplayError(f"{p}: corrupt MCAP file ({type(exc).__name__}: {exc})") from None
 
-    def _read_messages(self, f: Any) -> None:
-        from mcap.reader import make_reader
+    def _read_messages(self, messages: Any) -> None:
         from mcap_protobuf.decoder import DecoderFactory
 
         decoders: dict[int, Any] = {}
         factory = DecoderFactory()
-        for schema, channel, message in make_reader(f).iter_messages(log_time_order=True):
+        for schema, channel, message in messages:
             topic, ns, data = channel.topic, message.log_time, message.data
             where = f"{topic} at {ns} ns"
             if channel.message_encoding == "json":

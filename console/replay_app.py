@@ -162,7 +162,8 @@ class ReplayApp:
         gui.add_html(page_style(RIGHT_PANEL_PX))
         with gui.add_folder("Replay"):
             gui.add_markdown(f"<small>Recording <code>{html.escape(Path(rec.path).name)}</code>: "
-                             f"{rec.duration:.1f} s, read-only</small>")
+                             f"{rec.duration:.1f} s, read-only"
+                             f"{' (salvaged: the file was not finished)' if rec.salvaged else ''}</small>")
             slider = gui.add_slider("Time [s]", 0.0, max(math.ceil(rec.duration * 10) / 10, 0.1), 0.1, 0.0,
                                     hint="Seconds from the start of the recording")
             self._play_btn = gui.add_button("Play", icon=viser.Icon.PLAYER_PLAY, color="green")

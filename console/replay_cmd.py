@@ -19,12 +19,16 @@ def add_replay_parser(subparsers: argparse._SubParsersAction) -> argparse.Argume
     p.add_argument("file", type=Path, metavar="FILE.mcap", help="the recording")
     p.add_argument("--host", default="127.0.0.1", help="interface to listen on (default 127.0.0.1)")
     p.add_argument("--port", type=_port, default=8080, help="TCP port (default 8080; 0 = any free port)")
+    p.add_argument("--salvage", action="store_true",
+                   help="read a recording that was not finished (the console was killed) up to where it ends")
     p.set_defaults(func=cmd_replay)
     return p
 
 
-def open_replay(path: str | Path, host: str = "127.0.0.1", port: int = 8080) -> "ReplayApp":  # type: ignore[name-defined]  # noqa: F821
-    """Read ``path`` and start the read-only console on it (stop it with ``stop()``).
+def open_replay(path: str | Path, host: str = "127.0.0.1", port: int = 8080,
+                salvage: bool = False) -> "ReplayApp":  # type: ignore[name-defined]  # noqa: F821
+    """Read ``path`` and start the read-only console on it (stop it with ``stop()``); ``salvage``: see
+    :class:`console.replay.Recording`.
 
     Raises :class:`console.cli.CliError` for a missing, non-MCAP, truncated or foreign file.
     """
@@ -34,7 +38,7 @@ def open_replay(path: str | Path, host: str = "127.0.0.1", port: int = 8080) -> 
     from .replay_app import ReplayApp
 
     try:
-        recording = Recording(path)
+        recording = Recording(path, salvage=salvage)
     except ReplayError as exc:
         raise CliError(str(exc)) from None
     app = ReplayApp(recording, host=host, port=port)
@@ -50,7 +54,9 @@ def cmd_replay(args: argparse.Namespace) -> int:
     logging.basicConfig(level=logging.INFO, format="%(asctime)s %(levelname)s %(name)s: %(message)s", datefmt="%H:%M:%S")
     for noisy in ("websockets", "websockets.server", "httpx"):
         logging.getLogger(noisy).setLevel(logging.WARNING)
-    app = open_replay(args.file, args.host, args.port)
+    app = open_replay(args.file, args.host, args.port, args.salvage)
+    if app.recording.salvaged:
+        print(f"{args.file}: not finished; salvaged {app.recording.duration:.1f} s", flush=True)
     print(f"MorphoNavi replay of {args.file}: open {app.url} in a browser (Ctrl-C to stop)", flush=True)
     app.serve_forever()
     return 0

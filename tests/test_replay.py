@@ -196,3 +196,61 @@ def test_replay_in_the_browser_plays_and_pauses(recorded: Any, replay: Any, tmp_
                 shutil.copy(shot, REPO / "docs" / "replay.png")
         finally:
             ctx.close()
+
+
+def test_a_cut_recording_is_salvaged_on_request(recorded: Any, tmp_path: Path, capsys: Any) -> None:
+    path, _ = recorded
+    full = Recording(path)
+    cut = tmp_path / "cut.mcap"
+    data = path.read_bytes()
+    cut.write_bytes(data[: int(len(data) * 0.8)])
+    with pytest.raises(ReplayError, match="--salvage"):
+        Recording(cut)
+    part = Recording(cut, salvage=True)
+    assert part.salvaged and not full.salvaged
+    assert part.start == full.start and part.end <= full.end
+    assert 0 < part.count("/robot/pose") <= full.count("/robot/pose")
+    # what was salvaged is what the full file says at those times
+    for t in (part.start, (part.start + part.end) // 2, part.end):
+        a, b = part.state_at(t), full.state_at(t)
+        assert [o.id for o in a.scene.objects] == [o.id for o in b.scene.objects]
+        assert (a.robot is None) == (b.robot is None)
+        if a.robot is not None:
+            assert a.robot.pose == b.robot.pose
+    app = open_replay(cut, port=0, salvage=True)
+    try:
+        app.seek(app.recording.duration)
+        assert app.session.scene.objects == part.state_at(part.end).scene.objects
+    finally:
+        app.stop()
+    tiny = tmp_path / "tiny.mcap"
+    tiny.write_bytes(data[:40])
+    assert main(["replay", str(tiny), "--salvage", "--port", "0"]) == 2
+    assert "nothing to salvage" in capsys.readouterr().err
+
+
+def test_a_killed_console_leaves_a_log_that_salvage_reads(tmp_path: Path) -> None:
+    """The recorder ends its chunk every FLUSH_S: a copy of the file taken while it runs (what a kill leaves)
+    already holds the map."""
+    from console.recording import FLUSH_S, Recorder
+    from console.session import Session
+    from pipeline.scene import Scene, SceneObject
+
+    session = Session(tmp_path / "session", autosave=False)
+    rec = Recorder(session, folder=tmp_path / "rec").start()
+    try:
+        session.spawn(Scene(objects=(SceneObject("a", "office_chair", (2.0, 3.0, 0.5), (0.6, 1.0, 0.6)),)), "test")
+        copy = tmp_path / "killed.mcap"
+
+        def salvaged_map() -> bool:
+            if not rec.paths:
+                return False
+            shutil.copy(rec.paths[0], copy)
+            try:
+                return [o.id for o in Recording(copy, salvage=True).state_at(2**62).scene.objects] == ["a"]
+            except ReplayError:
+                return False
+
+        assert wait_until(salvaged_map, 10 * FLUSH_S), "the map never reached the file"
+    finally:
+        rec.close()
