@@ -76,6 +76,36 @@ def room(rng, door: bool):
     return cost, float(rng.choice([0.1, 0.25]))
 
 
+def walls(rng):
+    """Several walls of different heights across x or y (some with a door) and tall boxes: more
+    than one bottleneck altitude; flight layers of unequal costs."""
+    nx, ny, nz = int(rng.integers(10, 16)), int(rng.integers(8, 13)), int(rng.integers(6, 10))
+    occ = np.zeros((nx, ny, nz), bool)
+    for _ in range(int(rng.integers(1, 4))):
+        h = int(rng.integers(1, nz - 1))
+        if rng.random() < 0.5:
+            w = int(rng.integers(1, nx - 1))
+            occ[w, :, :h] = True
+            if rng.random() < 0.3:
+                y0 = int(rng.integers(0, ny - 1))
+                occ[w, y0:y0 + 2, :] = False
+        else:
+            occ[:, int(rng.integers(1, ny - 1)), :h] = True
+    for _ in range(int(rng.integers(0, 4))):
+        x0, y0 = int(rng.integers(0, nx - 1)), int(rng.integers(0, ny - 1))
+        occ[x0:x0 + 2, y0:y0 + 2, :int(rng.integers(1, nz))] = True
+    danger = ndimage.binary_dilation(occ, np.ones((3, 3, 3), bool)) & ~occ
+    layer = np.full(nz, float(rng.uniform(2.0, 4.0)))
+    layer[0] = 1.0
+    layer[1] = float(rng.uniform(5.0, 14.0))
+    if rng.random() < 0.5:
+        layer[2:] *= rng.uniform(0.8, 1.5, nz - 2)
+    cost = np.broadcast_to(layer, occ.shape).copy()
+    cost[danger] *= float(rng.uniform(2.0, 6.0))
+    cost[occ] = np.inf
+    return cost, 0.1
+
+
 def _cells(cost, rng, k=2, ground=False):
     free = np.argwhere(np.isfinite(cost) & ((np.arange(cost.shape[2]) == 0) if ground else True))
     idx = rng.choice(len(free), k, replace=False)
@@ -84,9 +114,12 @@ def _cells(cost, rng, k=2, ground=False):
 
 def _grids(seed: int):
     rng = np.random.default_rng(seed)
-    kind = seed % 3
+    kind = seed % 4
     if kind == 0:
         cost, res = random_grid(rng)
+        goal = _cells(cost, rng, 1)[0]
+    elif kind == 3:
+        cost, res = walls(rng)
         goal = _cells(cost, rng, 1)[0]
     else:
         cost, res = room(rng, door=(kind == 1))
@@ -94,7 +127,7 @@ def _grids(seed: int):
     return rng, cost, res, goal
 
 
-@pytest.mark.parametrize("seed", range(60))
+@pytest.mark.parametrize("seed", range(80))
 def test_heuristic_admissible_and_consistent(seed: int) -> None:
     rng, cost, res, goal = _grids(seed)
     h = heuristic_field(cost, goal, res)
@@ -124,6 +157,16 @@ def test_heuristic_is_tight_where_flying_is_the_only_way() -> None:
     octile_only = res * 1.0 * 25  # what the octile bound knows
     assert octile_only < 0.6 * true
     assert 0.9 * true <= h[start] <= true * (1 + 1e-9)
+
+
+def test_several_bottleneck_altitudes_are_covered() -> None:
+    # The admissibility / consistency test above runs on grids whose goal has several bottleneck
+    # altitudes, each with its own distance table.
+    hits = 0
+    for seed in range(3, 80, 4):  # its several-walls grids
+        rng, cost, res, goal = _grids(seed)
+        hits += len(build_layer_heuristic(np.ascontiguousarray(cost), goal, res).levels) > 1
+    assert hits >= 3
 
 
 def test_tables_shapes_and_levels() -> None:
