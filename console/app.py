@@ -29,6 +29,7 @@ from planner.grid import Workspace
 from .capture_view import CaptureView
 from .grid_view import GridView
 from .mapping_job import MappingJob, Perceiver
+from .model_preload import ModelPreload
 from .mission_view import MissionRunner, MissionView
 from .objects_view import ObjectsView
 from .paths_view import PathsView
@@ -129,6 +130,7 @@ class ConsoleApp:
         self.session: Session | None = None
         self.link: Any = None
         self.mapping: MappingJob | None = None
+        self.preload: ModelPreload | None = None
         self.runner: MissionRunner | None = None
         self.watcher: SceneWatcher | None = None
         self.views: dict[str, Any] = {}
@@ -164,13 +166,15 @@ class ConsoleApp:
         if self.recorder is not None:
             self._closers.append(self.recorder.close)
         perceiver = self._perceiver_override or self._choose_perceiver()
-        self.mapping = MappingJob(session, self._take_photo, perceiver)
+        self.preload = ModelPreload(session, perceiver)  # started once the page is up: progress in the page
+        self.mapping = MappingJob(session, self._take_photo, perceiver, self.preload)
         self.runner = self._make_runner()
 
         self.server = server = viser.ViserServer(host=cfg.host, port=cfg.port, label="MorphoNavi", verbose=False)
         self._closers.append(server.stop)
         self._layout(perceiver)
         session.subscribe(self._on_session_event)
+        self.preload.start()  # the models load in the background; a capture before they are ready waits
         self._connect_robot()
         if self.runner is not None and hasattr(self.runner, "close"):
             self._closers.append(self.runner.close)  # stopped before the link closes
@@ -411,7 +415,7 @@ class ConsoleApp:
         self._job_bar.visible = job.running
         self._job_bar.value = round(100 * job.fraction, 1)
         if job.running:
-            text = f"{html.escape(job.message)}…"
+            text = f"{html.escape(job.name)}: {html.escape(job.message)}…"
         elif job.error:
             text = f"<b style='color:#d62728'>failed</b>: {html.escape(job.error)}"
         else:

@@ -27,6 +27,7 @@ from pipeline.map_fusion import fuse
 from pipeline.scene import Scene
 
 from .link.base import CaptureResult
+from .model_preload import ModelPreload
 
 from .session import CaptureRecord, Detection, JobStatus, Session, SessionError
 
@@ -54,6 +55,16 @@ class Perception:
 
 Progress = Callable[[float, str], None]
 """``progress(fraction in [0, 1], stage text)``."""
+
+STAGE_TEXT = {
+    "detect": "detect: finding objects",
+    "segment": "segment: masks where a distance needs one",
+    "depth": "depth: estimating the depth map",
+    "distance": "distance: ranging and placing the objects",
+}
+"""What the progress bar says as each mapping stage (:data:`pipeline.stage_progress.STAGES`) begins."""
+
+WAITING_TEXT = "waiting for the models to load"
 
 TakePhoto = Callable[[], CaptureResult]
 
@@ -86,12 +97,16 @@ class MappingJob:
         session: Where progress and results go.
         take_photo: Asks the robot for a photo and its pose (blocking).
         perceiver: The perception backend.
+        preload: The background loading of the perceiver's models (:mod:`console.model_preload`);
+            a run waits for it after taking the photo, saying so in its progress.
     """
 
-    def __init__(self, session: Session, take_photo: TakePhoto, perceiver: Perceiver) -> None:
+    def __init__(self, session: Session, take_photo: TakePhoto, perceiver: Perceiver,
+                 preload: ModelPreload | None = None) -> None:
         self._session = session
         self._take_photo = take_photo
         self.perceiver = perceiver
+        self.preload = preload
         self._lock = threading.Lock()
         self._thread: threading.Thread | None = None
         self._held: tuple[Scene, str] | None = None
@@ -163,6 +178,8 @@ class MappingJob:
             except Exception as exc:  # the link's errors, whatever their type
                 raise MappingError(f"the robot did not deliver a photo: {exc}") from exc
             t_capture = time.perf_counter() - t0
+            if self.preload is not None:
+                self.preload.wait_ready(lambda f, text: self._report(0.15, f"{WAITING_TEXT}: {text} ({f:.0%})"))
             self._report(0.15, f"photo {shot.image.shape[1]}x{shot.image.shape[0]} received; "
                                f"perception: {self.perceiver.label}")
 
@@ -242,18 +259,37 @@ class MapperPerceiver:
         self._bundle_for = bundle_for
         self._catalog: Any = None
 
+    def preload(self, progress: Progress) -> None:
+        """Load what the first capture would otherwise load: the mapper's modules, the catalog and
+        (offline models) the model weights, run once on a blank photo. Raises :class:`MappingError`."""
+        from pipeline.catalog import default_catalog
+        from pipeline.mapper import Mapper  # noqa: F401  (imports scipy, the models' runtime, ...)
+
+        progress(0.02, "catalog")
+        if self._catalog is None:
+            self._catalog = default_catalog()
+        prepare = getattr(self._bundle_for, "preload", None)
+        if prepare is not None:
+            prepare(lambda f, text: progress(0.05 + 0.95 * max(0.0, min(1.0, f)), text))
+        progress(1.0, "ready")
+
     def perceive(self, shot: CaptureResult, capture_id: str, progress: Progress) -> Perception:
         from pipeline.catalog import default_catalog
         from pipeline.mapper import Mapper
+        from pipeline.stage_progress import StageFractions
 
         progress(0.0, f"preparing {self.label}")
         bundle = self._bundle_for(shot)
         if self._catalog is None:
             self._catalog = default_catalog()
-        progress(0.1, "detecting, segmenting and estimating depth")
+        fractions = StageFractions()
+
+        def on_stage(stage: str) -> None:
+            progress(0.05 + 0.9 * fractions.at_start(stage), STAGE_TEXT.get(stage, stage))
+
         with Mapper(bundle, self._catalog) as mapper:
             res = mapper.run(shot.image, shot.intrinsics, shot.mount, shot.robot_pose, capture_id=capture_id,
-                             image_name=shot.name or None)
+                             image_name=shot.name or None, on_stage=on_stage)
         progress(1.0, f"{len(res.scene.objects)} objects placed")
         dets = tuple(
             Detection(m.detection.label, float(m.detection.score), tuple(m.detection.box), m.object_id)  # type: ignore[arg-type]
@@ -284,26 +320,54 @@ def ground_truth_bundle_for(shot: CaptureResult) -> Any:
 
 
 class OfflineModels:
-    """The offline model set, loaded on first use (in the mapping thread) and kept."""
+    """The offline model set, loaded by :meth:`preload` (at console start) or on first use (in the
+    mapping thread), and kept."""
 
     def __init__(self, model_dir: Path | None) -> None:
         self.model_dir = model_dir
         self._bundle: Any = None
         self._lock = threading.Lock()
 
-    def __call__(self, shot: CaptureResult) -> Any:
+    def _load(self) -> Any:
         from pipeline.catalog import default_catalog
         from pipeline.mapper import load_mapping_models
         from pipeline.models.base import ModelError
 
+        if self._bundle is None:
+            try:
+                # closed-vocabulary labels (COCO) mapped to catalog classes
+                self._bundle = load_mapping_models("offline", self.model_dir, default_catalog())
+            except ModelError as exc:  # ModelMissingError names `morphonavi models fetch NAME`
+                raise MappingError(str(exc)) from None
+        return self._bundle
+
+    def __call__(self, shot: CaptureResult) -> Any:
         with self._lock:
-            if self._bundle is None:
-                try:
-                    # closed-vocabulary labels (COCO) mapped to catalog classes
-                    self._bundle = load_mapping_models("offline", self.model_dir, default_catalog())
-                except ModelError as exc:  # ModelMissingError names `morphonavi models fetch NAME`
-                    raise MappingError(str(exc)) from None
-            return self._bundle
+            return self._load()
+
+    def preload(self, progress: Progress) -> None:
+        """Load the weights, then run each model once on a blank 640 x 480 photo (onnxruntime's
+        first run allocates its buffers), reporting each step. Raises :class:`MappingError`."""
+        from pipeline.catalog import default_catalog
+        from pipeline.models.base import ModelError
+
+        with self._lock:
+            progress(0.0, "loading YOLOX-Nano, MobileSAM and FastDepth")
+            bundle = self._load()
+            blank = np.full((480, 640, 3), 127, np.uint8)
+            try:
+                progress(0.4, "first run of the detector")
+                bundle.detector.detect(blank, list(default_catalog().prompts()))
+                if bundle.depth is not None:
+                    progress(0.5, "first run of the depth model")
+                    bundle.depth.estimate(blank)
+                if bundle.segmenter is not None:
+                    progress(0.6, "first run of the segmenter")
+                    bundle.segmenter.set_image(blank)
+                    bundle.segmenter.segment_box((200.0, 150.0, 440.0, 330.0))
+            except ModelError as exc:
+                raise MappingError(str(exc)) from None
+            progress(1.0, "models ready")
 
 
 def missing_offline_models(model_dir: Path | None) -> list[str]:

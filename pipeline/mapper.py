@@ -35,6 +35,7 @@ from pipeline.models.nms import nms
 from pipeline.placement import heading_in_frame
 from pipeline.ranging import MappedObject, Ranger
 from pipeline.scene import Capture, Scene, SceneObject, Source
+from pipeline.stage_progress import StageCallback, stage_reporter
 from pipeline.tiled_detection import detect_tiled
 
 
@@ -102,6 +103,7 @@ class Mapper:
         prompts: Sequence[str] | Sequence[Prompt] | None = None,
         capture_id: str | None = None,
         image_name: str | None = None,
+        on_stage: StageCallback | None = None,
     ) -> MapResult:
         """Map one image and keep the intermediate results.
 
@@ -113,6 +115,8 @@ class Mapper:
             prompts: Words to look for (``None``: the catalog's prompts), or ``(text, class)`` pairs.
             capture_id: Id of the capture in the scene (default from the time).
             image_name: Image file name recorded in the capture.
+            on_stage: Called as each stage begins, in the order of :data:`pipeline.stage_progress.STAGES`
+                (``detect``, ``segment``, ``depth``, ``distance``); see :mod:`pipeline.stage_progress`.
 
         Raises:
             MapperError: Bad image, intrinsics that do not match it, empty prompts, or prompts the
@@ -147,17 +151,16 @@ class Mapper:
         # --- detection, depth and the image encoder, concurrently ---------------------------------
         segmenter = getattr(self.models, "segmenter", None) if cfg.segment != "none" else None
         depth_model = getattr(self.models, "depth", None)
-        early = segmenter is not None and cfg.segment == "all"
+        report = stage_reporter(on_stage)
+        early = segmenter is not None and cfg.segment == "all" and cfg.parallel
         enc_future = self._submit(segmenter.set_image, image, timings, "segment_encoder") if early else None
-        depth_future = self._submit(depth_model.estimate, image, timings, "depth") if depth_model else None
+        depth_future = self._submit(depth_model.estimate, image, timings, "depth") if depth_model and cfg.parallel else None
+        report("detect")
         tile_px = self._tile_px()
         if tile_px is None:
             detections = _timed(detector.detect, timings, "detect")(image, pairs)
         else:
             detections = _timed(detect_tiled, timings, "detect")(detector, image, pairs, tile_px)
-        depth_map: DepthMap | None = depth_future.result() if depth_future else None
-        if enc_future is not None:
-            enc_future.result()
         detections = sorted(detections, key=lambda d: -d.score)
         if cfg.same_object_iou is not None and len(detections) > 1:
             keep = nms(np.array([d.box for d in detections]), np.array([d.score for d in detections]),
@@ -166,6 +169,9 @@ class Mapper:
         detections = detections[: cfg.max_objects]
 
         # --- segmentation: one decoder run per confident box ---------------------------------------
+        report("segment")
+        if enc_future is not None:
+            enc_future.result()
         wanted = [
             segmenter is not None and det.score >= cfg.segment_min_score and det.width >= 2 and det.height >= 2
             and (cfg.segment == "all" or ranger.needs_mask(det, w, h))
@@ -181,7 +187,13 @@ class Mapper:
         timings["segment_decoder"] = time.perf_counter() - t0 if any(wanted) else 0.0
         timings.setdefault("segment_encoder", 0.0)
         timings["segment"] = timings["segment_encoder"] + timings["segment_decoder"]
+        report("depth")
+        depth_map: DepthMap | None = (
+            depth_future.result() if depth_future is not None
+            else _timed(depth_model.estimate, timings, "depth")(image) if depth_model is not None else None
+        )
         timings.setdefault("depth", 0.0)
+        report("distance")
 
         # --- distance and placement -----------------------------------------------------------------
         t0 = time.perf_counter()
