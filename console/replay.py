@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import bisect
 import json
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
@@ -119,6 +119,8 @@ def _route(d: Any) -> RouteSnapshot:
 
 
 def _robot(d: Any, pose: Pose | None) -> RobotSnapshot:
+    if d["landed"] is not None and not isinstance(d["landed"], bool):
+        raise ValueError(f"landed: must be true, false or null, got {d['landed']!r}")
     return RobotSnapshot(pose=pose if pose is not None else _pose(d, "/robot/state"), mode=str(d["mode"]),
                          armed=bool(d["armed"]), battery=None if d["battery"] is None else float(d["battery"]),
                          healthy=bool(d["healthy"]), detail=str(d["detail"]), stamp=float(d["stamp"]),
@@ -246,7 +248,7 @@ class Recording:
             if topic == rs.MISSION_JSON:
                 return None if v["mission"] is None else Mission.from_dict(v["mission"])
             if topic == rs.ROBOT_STATE:
-                return v
+                return _robot(v, None)
             if topic == rs.PROGRESS:
                 return RunStatus(str(v["state"]), None if v["segment"] is None else int(v["segment"]),
                                  float(v["fraction"]), str(v["message"]))
@@ -314,10 +316,9 @@ class Recording:
         scene = get(rs.SCENE_JSON) or Scene()
         meta = get(rs.CAPTURE_META)
         capture = self._capture(versions[rs.CAPTURE_META], meta) if meta is not None else None
-        state, pose = get(rs.ROBOT_STATE), get(rs.POSE)
-        if pose is not None and versions[rs.POSE] < versions.get(rs.ROBOT_STATE, 0):
-            pose = None  # the state (written on a change of mode etc.) is newer than the last pose
-        robot = _robot(state, pose) if state is not None else None
+        robot, pose = get(rs.ROBOT_STATE), get(rs.POSE)
+        if robot is not None and pose is not None and versions[rs.POSE] > versions[rs.ROBOT_STATE]:
+            robot = replace(robot, pose=pose)  # the pose is written more often than the rest of the state
         logs = self._tracks.get(rs.LOG)
         lines: tuple[tuple[int, str], ...] = ()
         if logs is not None:

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import json
 import math
+import re
 import shutil
 from pathlib import Path
 from typing import Any
@@ -118,12 +119,26 @@ def test_bad_files_are_refused_with_exit_code_2(recorded: Any, tmp_path: Path, c
         cid = w.register_channel("/other", "json", sid)
         w.add_message(cid, log_time=1, data=json.dumps({"a": 1}).encode(), publish_time=1)
         w.finish()
+    bad_scene = tmp_path / "bad_scene.mcap"
+    with open(bad_scene, "wb") as f:
+        w = Writer(f)
+        w.start("", "test")
+        for n, (topic, value) in enumerate((
+                ("/morphonavi/session", {"workspace": {"min": [0, 0, 0], "max": [5, 8, 3], "resolution": 0.25},
+                                         "margin": 0.35, "start": [2.5, 0.7, 0.0]}),
+                ("/morphonavi/scene", {"version": 1, "objects": [{"id": "a", "label": "box", "position": [1, 2],
+                                                                 "size": [1, 1, 1]}]}))):
+            sid = w.register_schema(topic, "jsonschema", b"{}")
+            cid = w.register_channel(topic, "json", sid)
+            w.add_message(cid, log_time=n + 1, data=json.dumps(value).encode(), publish_time=n + 1)
+        w.finish()
     cases = {tmp_path / "missing.mcap": "no such file", truncated: "truncated", not_mcap: "not an MCAP file",
-             foreign: "not a MorphoNavi recording", tmp_path: "not a file"}
+             foreign: "not a MorphoNavi recording", tmp_path: "not a file",
+             bad_scene: "/morphonavi/scene at 2 ns: malformed .*position"}
     for bad, why in cases.items():
         assert main(["replay", str(bad), "--port", "0"]) == 2
         err = capsys.readouterr().err
-        assert err.startswith("morphonavi replay: error: ") and why in err and "Traceback" not in err, err
+        assert err.startswith("morphonavi replay: error: ") and re.search(why, err) and "Traceback" not in err, err
         with pytest.raises(ReplayError, match=why):
             Recording(bad)
         with pytest.raises(CliError):
