@@ -50,7 +50,7 @@ _HEAP_START = 4096
 LAYER_BUDGET_MIN = 256  # the default budget of octile expansions is at least this (see layer_budget)
 _NEVER = np.iinfo(np.int64).max
 _MARGIN = 1.0 - 1e-9  # the layer-aware bound times this: still consistent, safe against rounding
-_NO_LAYER = LayerHeuristic(np.zeros(1), np.zeros(1, np.int64), np.zeros(0, np.int64), np.zeros((0, 1)),
+_NO_LAYER = LayerHeuristic(np.zeros(1), np.zeros(1, np.int64), np.zeros(0, np.int64), np.zeros((0, 3)),
                            np.zeros(1), 0.0, 0)  # placeholder tables while the octile bound is used
 
 

@@ -19,7 +19,9 @@ one (0 or 1). Columns ``q = (i, j)``; ``zlo(q)`` is the lowest passable layer of
 - For a few levels ``T`` (``T >= 2``, ``zlo(goal column) < T``): ``Ω_T = {q: R(q) < T}``
   (where the goal is reachable below ``T``) and ``dW_T(q)``, the 2D octile distance [cells] from
   ``q`` to the columns outside ``Ω_T`` next to it (where a path enters ``Ω_T`` from, at altitude
-  ``>= T``).
+  ``>= T``); ``ρ_T(e)``, the least *rest* (cost minus the credits below) of an *entry move* from
+  outside ``Ω_T`` at altitude ``e`` into it (one pass over those boundary columns),
+  ``κ_T(H) = min_e [ρ_T(e) + 2 S(max(e, H))] - 2 S(H)`` and ``κ0_T = min_e ρ_T(e)``.
 
 **The bound.** Split every edge's cost into a horizontal credit ``res h π̄`` and the rest. Over a
 path the horizontal credits sum to at least ``D2`` and the rest to at least the vertical credits
@@ -29,16 +31,20 @@ path the horizontal credits sum to at least ``D2`` and the rest to at least the 
 
   ``hA(a) = D2(q) + 2 S(H) - S(z) - S(zg)``,  ``H = max(R(q), z, zg)``.
 
-For a cell in the air (``z >= 2``) outside ``Ω_T`` every path either (L) comes down to layer
-``<= 1`` before it enters ``Ω_T``, then climbs again to ``>= T``, or (F) stays in the air until it
-enters ``Ω_T``, which is at least ``dW_T(q)`` cells away horizontally and ``|z - T|`` layers
-away vertically. In the air ``c̄ >= mf`` and ``π̄ <= (√2-1) mf``, so a move's rest is at least
+Every path from a cell outside ``Ω_T`` makes an entry move at some altitude ``e``, whose rest is
+not part of any credit, after peaking at ``>= max(H, e)``: ``A_T = hA + κ_T(H)`` there. For a cell
+in the air (``z >= 2``) outside ``Ω_T`` every path either (L) comes down to layer ``<= 1`` before it
+enters ``Ω_T``, then climbs again to ``>= T``, or (F) stays in the air until it enters ``Ω_T``,
+which is at least ``dW_T(q)`` cells away horizontally and ``|z - T|`` layers away vertically. In
+the air ``c̄ >= mf`` and ``π̄ <= (√2-1) mf``, so a move's rest is at least
 ``res mf (len - (√2-1) h)``, which is ``>= res mf (a h + b v)`` for ``(a, b) = (2-√2, √3-√2)``
-and ``((√3+√2-3)/(√2-1), 1-a)`` (checked on the five move shapes). Hence
+and ``((√3+√2-3)/(√2-1), 1-a)`` (checked on the five move shapes). Hence, with
+``tg = max(T, zg)``,
 
-  ``hL = D2 + S(z) - 2 S(1) + 2 S(max(T, zg)) - S(zg)``,
-  ``hF = max(hA, D2 + res mf max_(a,b) (a dW_T + b |z - T|) + S(T) - S(zg))``,
-  ``h_T = min(hL, hF)`` there, ``hA`` elsewhere; ``h = max(octile bound, hA, max_T h_T)``.
+  ``hL = D2 + S(z) - 2 S(1) + 2 S(tg) + κ_T(tg) - S(zg)``,
+  ``X = D2 + res mf max_(a,b) (a dW_T + b |z - T|) + S(T) - S(zg) + κ0_T``,
+  ``h_T = max(A_T, min(hL, X))`` there (``A_T`` on the floor layers), ``hA`` inside ``Ω_T``;
+  ``h = max(octile bound, hA, max_T h_T)``.
 
 *Admissible*: each term is a lower bound of every path (of its class; the classes cover all
 paths). *Consistent*, i.e. ``h(a) <= e + h(b)`` for a move ``a = (q, z) -> b = (q', z')`` of cost
@@ -50,13 +56,16 @@ paths). *Consistent*, i.e. ``h(a) <= e + h(b)`` for a move ``a = (q, z) -> b = (
   ``S(z + 1) - S(z) = P(z)``. Descent: ``H(b) >= z`` gives ``H(a) <= H(b)``, else ``H(b) = z - 1``
   and ``H(a) <= z``. In every case the ``S`` part drops by at most the move's vertical credit, so
   ``hA(a) - hA(b) <= e``.
-- Inside ``{z >= 2, q ∉ Ω_T}`` (moves between air cells, ``c̄ >= mf``): ``hL`` drops by at most
-  ``res h π̄ + v P``, the second term of ``hF`` by at most ``res h π̄ + res mf (a h + b v)``
-  (``dW_T`` and ``|z - T|`` are 1-Lipschitz), both ``<= e``.
-- Leaving that region into ``Ω_T``: ``q`` is next to ``Ω_T``, ``dW_T(q) = 0``, and since
-  ``b <= 0.65 < 1`` and ``P(j) >= res mf`` for ``j >= 2``, ``hF(a) = hA(a)``. Down to layer 1:
-  if ``R(q') >= T``, ``hL(a) - hA(b) <= D2(q) - D2(q') + P(1) <= e``; otherwise ``q' ∈ Ω_T`` and
-  again ``hF(a) = hA(a)``. Entering the region: ``h_T(b) >= hA(b)``.
+- ``A_T``: ``ψ(H) = 2 S(H) + κ_T(H)`` is non-decreasing with ``ψ(H + 1) - ψ(H) <= 2 P(H)``, so
+  the case analysis of ``hA`` holds for it; an entry move out of ``a`` has
+  ``ψ(H(a)) <= its rest + 2 S(H(a))``, so ``A_T(a) <= hA(a) + rest <= e + hA(b)``.
+- ``M = min(hL, X)`` inside ``{z >= 2, q ∉ Ω_T}`` (moves between air cells, ``c̄ >= mf``): ``hL``
+  drops by at most ``res h π̄ + v P``, ``X`` by at most ``res h π̄ + res mf (a h + b v)``
+  (``dW_T`` and ``|z - T|`` are 1-Lipschitz), both ``<= e``. Down to layer 1 outside ``Ω_T``:
+  ``hL(a) - A_T(b) <= D2(q) - D2(q') + P(1) + ψ(tg) - ψ(H(b)) <= e`` as ``H(b) >= tg``. Into
+  ``Ω_T``: ``q`` is next to it, ``dW_T(q) = 0``, and since ``b <= 0.65 < 1`` and
+  ``P(j) >= res mf`` for ``j >= 2``, ``X(a) <= hA(a) + κ0_T <= hA(a) + rest <= e + hA(b)``.
+- So each part of ``h_T(a)`` is at most ``e`` plus a part of ``h_T(b)``: ``h_T`` is consistent.
 - The octile bound is consistent (:func:`planner.astar.astar`); a min or max of consistent
   functions is consistent.
 
@@ -93,7 +102,9 @@ class LayerHeuristic:
         d2: float64 ``[nx*ny]`` 2D lower bound of the horizontal credits to the goal [cost·m].
         rcol: int64 ``[nx*ny]`` bottleneck altitude ``R`` [layers]; ``nz`` when cut off in 2D.
         levels: int64 ``[L]`` the altitudes ``T`` with a distance table (``L <= MAX_LEVELS``).
-        dw: float64 ``[L, nx*ny]`` octile distance [cells] to where a path enters ``Ω_T``.
+        dw: float64 ``[L, nx*ny + nz + 1]``: per level, the octile distance [cells] from each
+            column to where a path enters ``Ω_T``, then ``κ_T(H)`` for ``H < nz``, then ``κ0_T``
+            [cost·m] (see the module).
         s: float64 ``[nz]`` cumulative vertical credits ``S(k)`` [cost·m].
         mfres: ``mf * resolution`` [cost·m per cell]; 0 when there is no flight layer.
         zg: The goal's layer.
@@ -349,6 +360,67 @@ def _entry_distance(rcol, nx, ny, t):
     return d.reshape(-1)
 
 
+@njit(cache=True)
+def _entry_rest(cost, rcol, price, t, s, res):
+    """``ρ[e]``: the least *rest* (cost minus its horizontal credit ``res h π̄`` and its vertical
+    credit ``P``) of a move from a column with ``R >= t`` at altitude ``e`` into one with ``R < t``
+    (every path from outside ``Ω_t`` to the goal makes such an entry move once at least)."""
+    nx, ny, nz = cost.shape
+    rho = np.full(nz, np.inf)
+    sq2 = math.sqrt(2.0)
+    for x in range(nx):
+        for y in range(ny):
+            col = x * ny + y
+            if rcol[col] < t:
+                continue
+            for dx in range(-1, 2):
+                x2 = x + dx
+                if x2 < 0 or x2 >= nx:
+                    continue
+                for dy in range(-1, 2):
+                    y2 = y + dy
+                    if (dx == 0 and dy == 0) or y2 < 0 or y2 >= ny:
+                        continue
+                    col2 = x2 * ny + y2
+                    if rcol[col2] >= t:
+                        continue
+                    hz = 1.0 if (dx == 0 or dy == 0) else sq2
+                    hcred = res * hz * 0.5 * (price[col] + price[col2])
+                    for e in range(nz):
+                        cu = cost[x, y, e]
+                        if cu == np.inf:
+                            continue
+                        for de in range(-1, 2):
+                            e2 = e + de
+                            if e2 < 0 or e2 >= nz:
+                                continue
+                            cv = cost[x2, y2, e2]
+                            if cv == np.inf:
+                                continue
+                            ln = math.sqrt(hz * hz + de * de)
+                            rest = res * ln * 0.5 * (cu + cv) - hcred
+                            if de != 0:
+                                j = e if e < e2 else e2
+                                rest -= s[j + 1] - s[j]
+                            if rest < 0.0:
+                                rest = 0.0
+                            if rest < rho[e]:
+                                rho[e] = rest
+    return rho
+
+
+def _entry_terms(rho: np.ndarray, s: np.ndarray) -> tuple[np.ndarray, float]:
+    """``κ(H) = min_e [ρ(e) + 2 S(max(e, H))] - 2 S(H)`` for ``H < nz`` and ``κ0 = min ρ``: what
+    the entry move and the climb to its altitude add to the vertical credits ``2 S(H)``."""
+    nz = s.size
+    e = np.arange(nz)
+    kap = np.empty(nz)
+    for hh in range(nz):
+        kap[hh] = float(np.min(rho + 2.0 * s[np.maximum(e, hh)])) - 2.0 * s[hh]
+    kap = np.where(np.isfinite(kap), np.maximum(kap, 0.0), np.inf)
+    return kap, float(rho.min())
+
+
 # --------------------------------------------------------------------------- build / evaluate
 
 
@@ -380,15 +452,21 @@ def build_layer_heuristic(cost: np.ndarray, goal: tuple[int, int, int], resoluti
     pv = np.where(np.isfinite(mc[:-1]) & np.isfinite(mc[1:]), 0.5 * res * (mc[:-1] + mc[1:]), 0.0)
     s = np.concatenate(([0.0], np.cumsum(pv)))
     levels = _pick_levels(rcol, zlo, nz, int(zlo[g])) if math.isfinite(mf) else np.zeros(0, np.int64)
-    dw = np.empty((len(levels), nx * ny))
+    ncol = nx * ny
+    dw = np.empty((len(levels), ncol + nz + 1))
     for i, t in enumerate(levels):
-        dw[i] = _entry_distance(rcol, nx, ny, int(t))
+        dw[i, :ncol] = _entry_distance(rcol, nx, ny, int(t))
+        kap, k0 = _entry_terms(_entry_rest(cost, rcol, price, int(t), s, res), s)
+        dw[i, ncol:ncol + nz] = kap
+        dw[i, ncol + nz] = k0
     return LayerHeuristic(d2, rcol, levels, dw, s, mf * res if math.isfinite(mf) else 0.0, int(goal[2]))
 
 
 @njit(cache=True, inline="always")
 def layer_h(vx, vy, vz, ny, d2, rcol, levels, dw, s, mfres, zg):
-    """The layer-aware bound ``max(hA, max_T h_T)`` of cell ``(vx, vy, vz)`` (see the module)."""
+    """The layer-aware bound ``max(hA, max_T h_T)`` of cell ``(vx, vy, vz)`` (see the module).
+    ``dw[i]`` holds level ``i``'s entry distances (``nx * ny``), then ``κ_T(H)`` (``nz``), then
+    ``κ0_T``."""
     col = vx * ny + vy
     d = d2[col]
     if d == np.inf:
@@ -401,27 +479,31 @@ def layer_h(vx, vy, vz, ny, d2, rcol, levels, dw, s, mfres, zg):
         hh = zg
     sz = s[vz]
     szg = s[zg]
-    best = d + 2.0 * s[hh] - sz - szg
-    if vz >= 2:
-        ha = best
-        for i in range(levels.size):
-            t = levels[i]
-            if r < t:
-                continue
+    base = d + 2.0 * s[hh] - sz - szg
+    best = base
+    nz = s.size
+    ncol = dw.shape[1] - nz - 1
+    for i in range(levels.size):
+        t = levels[i]
+        if r < t:
+            continue
+        ha = base + dw[i, ncol + hh]
+        v = ha
+        if vz >= 2:
             tg = t if t > zg else zg
-            hl = d + sz - 2.0 * s[1] + 2.0 * s[tg] - szg
+            hl = d + sz - 2.0 * s[1] + 2.0 * s[tg] + dw[i, ncol + tg] - szg
             w = dw[i, col]
             dv = vz - t if vz > t else t - vz
             c1 = _A1 * w + _B1 * dv
             c2 = _A2 * w + _B2 * dv
             if c2 > c1:
                 c1 = c2
-            hf = d + mfres * c1 + s[t] - szg
-            if ha > hf:
-                hf = ha
-            v = hl if hl < hf else hf
-            if v > best:
-                best = v
+            hf = d + mfres * c1 + s[t] - szg + dw[i, ncol + nz]
+            m = hl if hl < hf else hf
+            if m > v:
+                v = m
+        if v > best:
+            best = v
     return best
 
 

@@ -176,7 +176,7 @@ def test_tables_shapes_and_levels() -> None:
     assert lh.d2.shape == (180,) and lh.rcol.shape == (180,) and lh.s.shape == (8,)
     assert lh.levels.tolist() == [4]  # the wall's top: the only bottleneck altitude
     assert lh.rcol[2 * 9 + 4] == 4 and lh.rcol[18 * 9 + 4] == 0
-    assert lh.dw.shape == (1, 180) and lh.dw[0, 2 * 9 + 4] == pytest.approx(8.0)  # to column x = 10
+    assert lh.dw.shape == (1, 180 + 8 + 1) and lh.dw[0, 2 * 9 + 4] == pytest.approx(8.0)  # to column x = 10
 
 
 @pytest.mark.parametrize("seed", range(40))
