@@ -87,6 +87,32 @@ def test_bench_metrics_on_a_rendered_sample(tmp_path: Path) -> None:
     assert errors["crate"] < 0.05 and errors["barrel"] < 0.05 and errors["rock"] < 0.1
 
 
+def test_bench_reports_each_cue_and_the_sigma_calibration(tmp_path: Path) -> None:
+    """With the sample's camera height the floor contact places the rock too; every cue is scored and the
+    fraction of errors within 1 and 2 sigma is reported (and printed)."""
+    root = write_dataset(tmp_path / "data")
+    meta_path = root / "synth" / "0001.json"
+    meta = json.loads(meta_path.read_text())
+    meta["camera_height"] = float(WORLD_FROM_CAM.translation[2])
+    meta_path.write_text(json.dumps(meta))
+    report = run_bench(root, None, CATALOG, gt_boxes=True, progress=False)
+    s = report.summary
+    assert s["matched"] == 3  # the rock (unknown size, no depth map) from its floor contact
+    assert s["cues"]["ground_contact"]["n"] == 3 and s["cues"]["size_prior"]["n"] == 2
+    assert s["cues"]["depth"]["n"] == 0 and s["cues"]["fused"]["n"] == 3
+    matches = report.samples[0]["matches"]
+    inside = sum(1 for m in matches if m["error_z"] <= m["sigma_z"])
+    assert s["cues"]["fused"]["within_1_sigma"] == pytest.approx(inside / 3)
+    assert 0 <= s["cues"]["fused"]["within_1_sigma"] <= s["cues"]["fused"]["within_2_sigma"] <= 1
+    assert all(m["cut"] == [] and m["sigma_z"] > 0 for m in matches)
+    text = format_report(report)
+    assert "ground_contact" in text and "<=1 sigma" in text
+    meta["camera_height"] = -1.0
+    meta_path.write_text(json.dumps(meta))
+    with pytest.raises(BenchError, match="camera_height"):
+        load_dataset(root, CATALOG)
+
+
 def test_bench_with_a_detector_counts_wrong_classes_as_unmatched(tmp_path: Path) -> None:
     root = write_dataset(tmp_path / "data")
     boxes = list(SCENE["boxes"]) + [SCENE["boxes"][0]]

@@ -258,6 +258,20 @@ def test_minimal_catalog_loads(tmp_path: Path) -> None:
     assert beta.size is None and beta.height is None
     assert cat.lookup("second") is beta
     assert cat.prompts() == [("an alpha", "alpha"), ("a beta", "beta")]
+    # no spread / on_floor given: the defaults
+    assert alpha.spread == (0.2, 0.2, 0.2) and alpha.on_floor
+    cat = Catalog.load(write_catalog(tmp_path, GOOD_A.replace(
+        "size = [0.5, 1.0, 0.4]", "size = [0.5, 1.0, 0.4]\nspread = [0.3, 0.07, 0.25]\non_floor = false") + GOOD_B))
+    assert cat.get("alpha").spread == (0.3, 0.07, 0.25) and not cat.get("alpha").on_floor
+
+
+def test_packaged_size_spreads_say_how_much_each_class_varies(catalog: Catalog) -> None:
+    """People and cars vary little in height, cabinets and tables a lot; table-top things are not on the floor."""
+    sh = {name: catalog.get(name).spread[1] for name in ("person", "car", "cabinet", "table")}
+    assert sh["person"] < 0.1 and sh["car"] < 0.1 and sh["cabinet"] >= 0.4 and sh["table"] >= 0.15
+    assert all(0 < v <= 2 for e in catalog for v in e.spread)
+    assert not catalog.get("monitor").on_floor and not catalog.get("cup").on_floor
+    assert catalog.get("office_cabinet").on_floor and catalog.get("person").on_floor
 
 
 def test_models_dir_override(tmp_path: Path) -> None:
@@ -304,6 +318,14 @@ def test_models_dir_override(tmp_path: Path) -> None:
         (GOOD_A.replace("size =", "sizes ="), "object[0] (alpha).sizes", "unknown field"),
         (GOOD_A.replace('"alpha"', '"Alpha Class"', 1), "object[0].name", "snake_case"),
         (GOOD_A.replace('name = "alpha"\n', ""), "object[0].name", "snake_case"),
+        (GOOD_A.replace("size = [0.5, 1.0, 0.4]", "size = [0.5, 1.0, 0.4]\nspread = [0.1, -0.1, 0.1]"),
+         "object[0] (alpha).spread[1]", "within 0..2"),
+        (GOOD_A.replace("size = [0.5, 1.0, 0.4]", "size = [0.5, 1.0, 0.4]\nspread = [0.1, 0.1]"),
+         "object[0] (alpha).spread", "relative 1-sigma"),
+        (GOOD_A.replace("size = [0.5, 1.0, 0.4]", "size = [0.5, 1.0, 0.4]\nspread = [0.1, nan, 0.1]"),
+         "object[0] (alpha).spread[1]", "finite"),
+        (GOOD_A.replace("size = [0.5, 1.0, 0.4]", 'size = [0.5, 1.0, 0.4]\non_floor = "yes"'),
+         "object[0] (alpha).on_floor", "true or false"),
     ],
 )
 def test_validation_errors_name_the_entry_and_field(
