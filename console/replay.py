@@ -15,7 +15,7 @@ import bisect
 import json
 from dataclasses import dataclass, replace
 from pathlib import Path
-from typing import Any
+from typing import Any, Sequence
 
 import numpy as np
 
@@ -131,19 +131,27 @@ class Recording:
     """A recording read into memory (see the module docstring).
 
     Args:
-        path: The ``.mcap`` file.
+        path: The ``.mcap`` file, or the parts of one rotated run in order (``run.mcap``,
+            ``run-002.mcap``, ...), read as one timeline.
         salvage: Read a file without its footer (a console that was killed) up to where it ends,
             instead of refusing it; :attr:`salvaged` tells whether that happened.
     """
 
-    def __init__(self, path: str | Path, salvage: bool = False) -> None:
-        self.path = Path(path)
+    def __init__(self, path: str | Path | Sequence[str | Path], salvage: bool = False) -> None:
+        self.paths = [Path(path)] if isinstance(path, (str, Path)) else [Path(p) for p in path]
+        if not self.paths:
+            raise ReplayError("no recording given")
         self.salvage = salvage
         self.salvaged = False
         self._tracks: dict[str, _Track] = {}
         self.info: ReplayInfo | None = None
         self._capture_cache: tuple[int, CaptureRecord] | None = None
-        self._read()
+        for self.path in self.paths:  # errors name the file being read
+            self._read()
+        self.path = self.paths[0]
+        for tr in self._tracks.values():  # parts overlap where a part re-states the state it starts with
+            order = sorted(range(len(tr.times)), key=tr.times.__getitem__)
+            tr.times, tr.items = [tr.times[i] for i in order], [tr.items[i] for i in order]
         if self.info is None:
             if self.salvaged:
                 raise ReplayError(f"{self.path}: truncated before its first MorphoNavi message: nothing to salvage")

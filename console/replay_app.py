@@ -161,7 +161,8 @@ class ReplayApp:
         server.initial_camera.up = (0.0, 0.0, 1.0)
         gui.add_html(page_style(RIGHT_PANEL_PX))
         with gui.add_folder("Replay"):
-            gui.add_markdown(f"<small>Recording <code>{html.escape(Path(rec.path).name)}</code>: "
+            names = ", ".join(p.name for p in rec.paths)
+            gui.add_markdown(f"<small>Recording <code>{html.escape(names)}</code>: "
                              f"{rec.duration:.1f} s, read-only"
                              f"{' (salvaged: the file was not finished)' if rec.salvaged else ''}</small>")
             slider = gui.add_slider("Time [s]", 0.0, max(math.ceil(rec.duration * 10) / 10, 0.1), 0.1, 0.0,

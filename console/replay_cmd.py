@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import logging
 from pathlib import Path
+from typing import Sequence
 
 
 def add_replay_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:  # type: ignore[type-arg]
@@ -16,7 +17,8 @@ def add_replay_parser(subparsers: argparse._SubParsersAction) -> argparse.Argume
         description="Open the console on a recording written by `morphonavi console` (the .mcap files in "
                     "<session>/recordings): a time slider, Play / Pause and speed; the 3D view, camera panel, "
                     "map, paths and robot show the state at that time. Nothing can be edited or commanded.")
-    p.add_argument("file", type=Path, metavar="FILE.mcap", help="the recording")
+    p.add_argument("file", type=Path, nargs="+", metavar="FILE.mcap",
+                   help="the recording (several: the parts of one run in order, e.g. run.mcap run-002.mcap)")
     p.add_argument("--host", default="127.0.0.1", help="interface to listen on (default 127.0.0.1)")
     p.add_argument("--port", type=_port, default=8080, help="TCP port (default 8080; 0 = any free port)")
     p.add_argument("--salvage", action="store_true",
@@ -25,7 +27,7 @@ def add_replay_parser(subparsers: argparse._SubParsersAction) -> argparse.Argume
     return p
 
 
-def open_replay(path: str | Path, host: str = "127.0.0.1", port: int = 8080,
+def open_replay(path: str | Path | Sequence[str | Path], host: str = "127.0.0.1", port: int = 8080,
                 salvage: bool = False) -> "ReplayApp":  # type: ignore[name-defined]  # noqa: F821
     """Read ``path`` and start the read-only console on it (stop it with ``stop()``); ``salvage``: see
     :class:`console.replay.Recording`.
@@ -55,8 +57,9 @@ def cmd_replay(args: argparse.Namespace) -> int:
     for noisy in ("websockets", "websockets.server", "httpx"):
         logging.getLogger(noisy).setLevel(logging.WARNING)
     app = open_replay(args.file, args.host, args.port, args.salvage)
+    names = " ".join(str(f) for f in args.file)
     if app.recording.salvaged:
-        print(f"{args.file}: not finished; salvaged {app.recording.duration:.1f} s", flush=True)
-    print(f"MorphoNavi replay of {args.file}: open {app.url} in a browser (Ctrl-C to stop)", flush=True)
+        print(f"{names}: not finished; salvaged {app.recording.duration:.1f} s", flush=True)
+    print(f"MorphoNavi replay of {names}: open {app.url} in a browser (Ctrl-C to stop)", flush=True)
     app.serve_forever()
     return 0

@@ -236,7 +236,7 @@ def test_a_full_disk_gives_one_notice(tmp_path: Path) -> None:
 
 
 def test_a_large_recording_is_split_into_parts_that_each_open_on_their_own(tmp_path: Path) -> None:
-    from console.replay import Recording
+    from console.replay import Recording, ReplayError
 
     session, notices = _session_with_notices(tmp_path)
     rec = Recorder(session, folder=tmp_path / "rec", max_bytes=60_000).start()
@@ -259,6 +259,14 @@ def test_a_large_recording_is_split_into_parts_that_each_open_on_their_own(tmp_p
         assert len(first.scene.objects) == (0 if n == 0 else 16)
     end = Recording(parts[-1]).state_at(Recording(parts[-1]).end)
     assert [o.position for o in end.scene.objects] == [o.position for o in last_scene.objects]
+    # the parts in order read as one timeline
+    whole, second = Recording(parts), Recording(parts[1])
+    assert (whole.start, whole.end) == (Recording(parts[0]).start, Recording(parts[-1]).end)
+    assert whole.state_at(second.start).scene == second.state_at(second.start).scene
+    assert whole.state_at(whole.end).scene.objects == end.scene.objects
+    assert whole.count("/robot/state") == sum(Recording(p).count("/robot/state") for p in parts)
+    with pytest.raises(ReplayError, match="missing.mcap: no such file"):
+        Recording([parts[0], tmp_path / "missing.mcap"])
 
 
 def test_no_record_turns_the_recording_off(tmp_path: Path) -> None:
