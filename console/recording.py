@@ -110,6 +110,8 @@ class Recorder:
         if s.capture is not None:
             self._put(CAPTURE, s.capture)
         self._put(RUN, s.run)
+        if s.robot is not None:
+            self._put(ROBOT, (s.robot, True, True))
         self._unsubscribe = s.subscribe(self._on_event)
         return self
 
@@ -181,7 +183,8 @@ class Recorder:
 
     def _on_robot(self, snap: RobotSnapshot) -> None:
         now = time.monotonic()
-        key = (snap.mode, snap.armed, snap.healthy, snap.detail, snap.messages[-1:] if snap.messages else (), snap.landed)
+        key = (snap.mode, snap.armed, snap.healthy, snap.detail, snap.messages[-1:] if snap.messages else (), snap.landed,
+               snap.position_valid, snap.ready, snap.readiness, snap.warnings)
         pose_due = now - self._last_pose >= self._pose_dt
         state_due = now - self._last_state >= self._state_dt or key != self._state_key
         if not (pose_due or state_due):
@@ -294,7 +297,7 @@ class Recorder:
     def _write_item(self, topic: str, ns: int, payload: Any) -> None:  # noqa: C901 (one branch per topic)
         if topic == ROBOT:
             snap, pose_due, state_due = payload
-            if pose_due:
+            if pose_due and snap.position_status != "unknown":  # no pose known: not drawn as one (the state says so)
                 pose, tf = rs.robot_messages(snap)
                 self._encode(rs.POSE, ns, pose)
                 self._encode(rs.TF, ns, tf)
