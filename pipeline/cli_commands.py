@@ -67,9 +67,9 @@ def _add_common(p: argparse.ArgumentParser) -> None:
     g.add_argument("--paper", action="store_true",
                    help="the paper's recipe: --placement ray --fusion fixed --no-uncut-sides --no-depth-fit, "
                         "objects facing the camera")
-    g.add_argument("--segment", choices=("all", "auto", "none"), default="all",
-                   help="all: segment every detection (default); auto: only those whose distance needs the mask "
-                        "(unknown size, or cut on both axes), skipping the 1-2 s encoder otherwise; none: boxes only")
+    g.add_argument("--segment", choices=("all", "auto", "none"), default="auto",
+                   help="auto: segment only detections whose distance needs the mask (unknown size, or cut on both "
+                        "axes), skipping the 1-2 s encoder otherwise (default); all: every detection; none: boxes only")
 
 
 def _run(fn: Callable[[argparse.Namespace], int], command: str) -> Callable[[argparse.Namespace], int]:
@@ -115,6 +115,7 @@ def cmd_map(args: argparse.Namespace) -> int:
     from pipeline.geometry import CameraConfig, Pose, load_camera_toml, parse_pose
     from pipeline.image_io import read_image
     from pipeline.mapper import Mapper, prompts_from_words
+    from pipeline.ranging import widen_sigmas
 
     if args.camera is not None and args.fov is not None:
         raise _UserError("--fov is for photos without a camera file; the camera file's intrinsics are used")
@@ -149,6 +150,7 @@ def cmd_map(args: argparse.Namespace) -> int:
         flag = f"assumed from {assumed.how}, +-{assumed.rel_sigma:.0%}"
         scene = dataclasses.replace(scene, captures=tuple(
             dataclasses.replace(c, models={**dict(c.models), "intrinsics": flag}) for c in scene.captures))
+        scene = widen_sigmas(scene, assumed.rel_sigma)  # every distance scales with the assumed focal length
     debug_files: list[Path] = []
     if args.debug:
         from pipeline.debug_images import write_debug_images
@@ -161,8 +163,10 @@ def cmd_map(args: argparse.Namespace) -> int:
           f"distance {t.get('distance', 0.0):.2f})")
     for o in scene.objects:
         d = o.source.distances.get("fused")
-        print(f"  {o.id:20s} {o.label:16s} score {o.score:.2f}  {o.source.method:9s} z {d:6.2f} m  "
-              f"world ({o.position[0]:.2f}, {o.position[1]:.2f}, {o.position[2]:.2f})")
+        sig = "" if o.sigma is None else f" +-{o.sigma:.2f}"
+        print(f"  {o.id:20s} {o.label:16s} score {o.score:.2f}  {o.source.method:9s} z {d:6.2f} m{sig}  "
+              f"world ({o.position[0]:.2f}, {o.position[1]:.2f}, {o.position[2]:.2f})"
+              + (f"  cut {'/'.join(o.cut)}" if o.cut else ""))
     for o in result.objects:
         if o.skipped:
             print(f"  skipped {o.detection.label} (score {o.detection.score:.2f}): {o.skipped}")

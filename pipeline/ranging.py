@@ -15,7 +15,7 @@ kept to reproduce the README's step table.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Sequence
 
 import numpy as np
@@ -32,6 +32,7 @@ from pipeline.mapper_config import MIN_DEPTH_SIGMA, MapperConfig
 from pipeline.models.base import DepthMap, Detection
 from pipeline.orientation import length_axis_from_points
 from pipeline.placement import GeometricEstimate, centre_on_ray, geometric_estimate
+from pipeline.scene import Scene
 from pipeline.size_prior import half_depth_stats, size_prior_cue
 
 @dataclass
@@ -413,6 +414,21 @@ class Ranger:
         wm = max((x2 - x1) * surface_z / intr.fx, 0.05)
         hm = max((y2 - y1) * surface_z / intr.fy, 0.05)
         return (wm, hm, wm)
+
+
+def widen_sigmas(scene: Scene, rel: float) -> Scene:
+    """``scene`` with each object's ``sigma`` [m] widened by a relative error ``rel`` common to every
+    distance (an assumed focal length: ``sigma^2 + (rel * range)^2``, range from the camera-frame centre)."""
+    if not (math.isfinite(rel) and rel >= 0):
+        raise ValueError(f"rel: must be a finite number >= 0, got {rel!r}")
+    out = []
+    for o in scene.objects:
+        cam = o.source.positions.get("camera")
+        if o.sigma is None or cam is None:
+            out.append(o)
+            continue
+        out.append(replace(o, sigma=math.hypot(o.sigma, rel * math.dist(cam, (0.0, 0.0, 0.0)))))
+    return replace(scene, objects=tuple(out))
 
 
 def _box_mask(box: Sequence[float], h: int, w: int, shrink: float = 0.0) -> np.ndarray:

@@ -90,3 +90,16 @@ def test_bench_samples_place_the_camera_at_their_height() -> None:
     tilted = BenchSample("y", "sunrgbd", Path("y.jpg"), Intrinsics(500, 500, 365, 265, 730, 530),
                          (0.0, math.cos(0.2), math.sin(0.2)), False, (), camera_height=1.2)
     assert tilted.mount.pitch == pytest.approx(0.2) and tilted.mount.position[2] == pytest.approx(1.2)
+
+
+def test_an_assumed_focal_length_widens_every_sigma() -> None:
+    from pipeline.ranging import widen_sigmas
+
+    a = SceneObject("a", "chair", (1, 2, 0.4), (0.5, 0.8, 0.5), sigma=0.3,
+                    source=Source(method="fused", positions={"camera": (0.0, 3.0, 4.0)}))
+    b = SceneObject("b", "chair", (1, 3, 0.4), (0.5, 0.8, 0.5))
+    out = widen_sigmas(Scene(objects=(a, b)), 0.3)
+    assert out.objects[0].sigma == pytest.approx(math.hypot(0.3, 0.3 * 5.0))
+    assert out.objects[1].sigma is None and out.objects[0].position == a.position
+    with pytest.raises(ValueError, match="rel"):
+        widen_sigmas(Scene(objects=(a,)), float("nan"))
