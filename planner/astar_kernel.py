@@ -14,10 +14,15 @@ from typing import Sequence
 import numpy as np
 from numba import njit
 
-from .heuristic import layer_h
-
 _SQ2 = 2.0 ** 0.5
 _SQ3 = 3.0 ** 0.5
+_S2M1 = _SQ2 - 1.0
+# The layer-aware heuristic (planner/heuristic.py): (a, b) pairs with a h + b v <= len - (√2-1) h
+# for all five move shapes (h, v), shrunk by 1e-9.
+_A1 = (2.0 - _SQ2) * (1 - 1e-9)
+_B1 = (_SQ3 - _SQ2) * (1 - 1e-9)
+_A2 = (_SQ3 + _SQ2 - 3.0) / _S2M1 * (1 - 1e-9)
+_B2 = (1.0 - (_SQ3 + _SQ2 - 3.0) / _S2M1) * (1 - 1e-9)
 
 
 # --------------------------------------------------------------------------- moves
@@ -145,6 +150,51 @@ def _octile(ax, ay, az, bx, by, bz):
     if a < b:
         a, b = b, a
     return a + 0.41421356237309515 * b + 0.31783724519578205 * c
+
+
+@njit(cache=True, inline="always")
+def layer_h(vx, vy, vz, ny, d2, rcol, levels, dw, s, mfres, zg):
+    """The layer-aware bound ``max(hA, max_T h_T)`` of cell ``(vx, vy, vz)`` (see :mod:`planner.heuristic`).
+    ``dw[i]`` holds level ``i``'s entry distances (``nx * ny``), then ``κ_T(H)`` (``nz``), then
+    ``κ0_T``."""
+    col = vx * ny + vy
+    d = d2[col]
+    if d == np.inf:
+        return np.inf
+    r = rcol[col]
+    hh = r
+    if vz > hh:
+        hh = vz
+    if zg > hh:
+        hh = zg
+    sz = s[vz]
+    szg = s[zg]
+    base = d + 2.0 * s[hh] - sz - szg
+    best = base
+    nz = s.size
+    ncol = dw.shape[1] - nz - 1
+    for i in range(levels.size):
+        t = levels[i]
+        if r < t:
+            continue
+        ha = base + dw[i, ncol + hh]
+        v = ha
+        if vz >= 2:
+            tg = t if t > zg else zg
+            hl = d + sz - 2.0 * s[1] + 2.0 * s[tg] + dw[i, ncol + tg] - szg
+            w = dw[i, col]
+            dv = vz - t if vz > t else t - vz
+            c1 = _A1 * w + _B1 * dv
+            c2 = _A2 * w + _B2 * dv
+            if c2 > c1:
+                c1 = c2
+            hf = d + mfres * c1 + s[t] - szg + dw[i, ncol + nz]
+            m = hl if hl < hf else hf
+            if m > v:
+                v = m
+        if v > best:
+            best = v
+    return best
 
 
 @njit(cache=True, inline="always")
@@ -400,3 +450,24 @@ def _trace(parent, s, t, ny, nz, offs, ddx, ddy, ddz):
             y -= ddy[d]
             z -= ddz[d]
     return path
+
+
+@njit(cache=True)
+def _field(nx, ny, nz, tx, ty, tz, hscale, d2, rcol, levels, dw, s, mfres, zg):
+    out = np.empty((nx, ny, nz))
+    for x in range(nx):
+        for y in range(ny):
+            for z in range(nz):
+                a = abs(x - tx)
+                b = abs(y - ty)
+                c = abs(z - tz)
+                if a < b:
+                    a, b = b, a
+                if b < c:
+                    b, c = c, b
+                if a < b:
+                    a, b = b, a
+                ho = hscale * (a + 0.41421356237309515 * b + 0.31783724519578205 * c)
+                hl = layer_h(x, y, z, ny, d2, rcol, levels, dw, s, mfres, zg)
+                out[x, y, z] = ho if ho > hl else hl
+    return out

@@ -72,7 +72,10 @@ paths). *Consistent*, i.e. ``h(a) <= e + h(b)`` for a move ``a = (q, z) -> b = (
 ``tests/test_heuristic.py`` checks ``h(a) <= e + h(b)`` on every edge and ``h <=`` the true
 cost-to-go on random and aerial-ground grids.
 
-The search multiplies ``h`` by ``1 - 1e-9`` (still consistent) as a margin for rounding.
+The search multiplies ``h`` by ``1 - 1e-9`` (still consistent) as a margin for rounding. The
+per-cell formula is :func:`planner.astar_kernel.layer_h`, kept in the kernel's file: numba's
+on-disk cache only watches a function's own file, so a kernel that inlined it from here would
+keep a stale copy after an edit.
 """
 
 from __future__ import annotations
@@ -83,15 +86,12 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
+from .astar_kernel import _field
+
 __all__ = ["LayerHeuristic", "build_layer_heuristic", "heuristic_field", "MAX_LEVELS"]
 
 MAX_LEVELS = 3
 _S2M1 = math.sqrt(2.0) - 1.0
-# (a, b) pairs with a h + b v <= len - (√2-1) h for all five move shapes (h, v), shrunk by 1e-9.
-_A1 = (2.0 - math.sqrt(2.0)) * (1 - 1e-9)
-_B1 = (math.sqrt(3.0) - math.sqrt(2.0)) * (1 - 1e-9)
-_A2 = (math.sqrt(3.0) + math.sqrt(2.0) - 3.0) / _S2M1 * (1 - 1e-9)
-_B2 = (1.0 - (math.sqrt(3.0) + math.sqrt(2.0) - 3.0) / _S2M1) * (1 - 1e-9)
 
 
 @dataclass(frozen=True)
@@ -462,49 +462,6 @@ def build_layer_heuristic(cost: np.ndarray, goal: tuple[int, int, int], resoluti
     return LayerHeuristic(d2, rcol, levels, dw, s, mf * res if math.isfinite(mf) else 0.0, int(goal[2]))
 
 
-@njit(cache=True, inline="always")
-def layer_h(vx, vy, vz, ny, d2, rcol, levels, dw, s, mfres, zg):
-    """The layer-aware bound ``max(hA, max_T h_T)`` of cell ``(vx, vy, vz)`` (see the module).
-    ``dw[i]`` holds level ``i``'s entry distances (``nx * ny``), then ``κ_T(H)`` (``nz``), then
-    ``κ0_T``."""
-    col = vx * ny + vy
-    d = d2[col]
-    if d == np.inf:
-        return np.inf
-    r = rcol[col]
-    hh = r
-    if vz > hh:
-        hh = vz
-    if zg > hh:
-        hh = zg
-    sz = s[vz]
-    szg = s[zg]
-    base = d + 2.0 * s[hh] - sz - szg
-    best = base
-    nz = s.size
-    ncol = dw.shape[1] - nz - 1
-    for i in range(levels.size):
-        t = levels[i]
-        if r < t:
-            continue
-        ha = base + dw[i, ncol + hh]
-        v = ha
-        if vz >= 2:
-            tg = t if t > zg else zg
-            hl = d + sz - 2.0 * s[1] + 2.0 * s[tg] + dw[i, ncol + tg] - szg
-            w = dw[i, col]
-            dv = vz - t if vz > t else t - vz
-            c1 = _A1 * w + _B1 * dv
-            c2 = _A2 * w + _B2 * dv
-            if c2 > c1:
-                c1 = c2
-            hf = d + mfres * c1 + s[t] - szg + dw[i, ncol + nz]
-            m = hl if hl < hf else hf
-            if m > v:
-                v = m
-        if v > best:
-            best = v
-    return best
 
 
 def heuristic_field(cost: np.ndarray, goal: tuple[int, int, int], resolution: float,
@@ -519,22 +476,3 @@ def heuristic_field(cost: np.ndarray, goal: tuple[int, int, int], resolution: fl
                   lh.d2, lh.rcol, lh.levels, lh.dw, lh.s, lh.mfres, lh.zg)
 
 
-@njit(cache=True)
-def _field(nx, ny, nz, tx, ty, tz, hscale, d2, rcol, levels, dw, s, mfres, zg):
-    out = np.empty((nx, ny, nz))
-    for x in range(nx):
-        for y in range(ny):
-            for z in range(nz):
-                a = abs(x - tx)
-                b = abs(y - ty)
-                c = abs(z - tz)
-                if a < b:
-                    a, b = b, a
-                if b < c:
-                    b, c = c, b
-                if a < b:
-                    a, b = b, a
-                ho = hscale * (a + 0.41421356237309515 * b + 0.31783724519578205 * c)
-                hl = layer_h(x, y, z, ny, d2, rcol, levels, dw, s, mfres, zg)
-                out[x, y, z] = ho if ho > hl else hl
-    return out
