@@ -493,3 +493,29 @@ def test_untrusted_metric_depth_keeps_objects_facing_the_camera() -> None:
     with Mapper(gt_bundle(MetricModelDepth()), CATALOG, MapperConfig(yaw_from_depth=True)) as mapper:
         forced = _by_label(mapper.run(SCENE["image"], INTR, MOUNT, ROBOT, capture_id="cap-1").scene)["crate"]
     assert _yaw_error_mod_pi(forced.yaw, crate_yaw) < math.radians(3.0)
+
+
+def test_floor_contact_places_an_object_twice_its_catalog_height() -> None:
+    """The issue's cabinets: a 'crate' 2.0 m tall where the catalog says 1.0 m, its top cut by the border.
+    The size prior alone (from the width: yaw unknown, a wide sigma) puts it far off; the floor under its
+    box bottom (camera 1 m up, 15 deg down) puts it right and dominates the fusion."""
+    tall = [("crate", (2.0, 5.5, 1.0), (0.8, 2.0, 0.6), 0.0)]
+    shot = render(tall, INTR, WORLD_FROM_CAM)
+    bundle = GroundTruthBundle(GroundTruthDetector(shot["boxes"], shot["labels"]), None, None)
+    true = np.array(tall[0][1])
+    rng = np.linalg.norm(true - WORLD_FROM_CAM.translation)
+    with Mapper(bundle, CATALOG, MapperConfig(ground_contact=False)) as mapper:
+        (alone,) = mapper.run(shot["image"], INTR, MOUNT, ROBOT).scene.objects
+    assert np.linalg.norm(np.array(alone.position) - true) / rng > 0.3
+    with Mapper(bundle, CATALOG) as mapper:
+        res = mapper.run(shot["image"], INTR, MOUNT, ROBOT)
+    (obj,) = res.scene.objects
+    assert np.linalg.norm(np.array(obj.position)[:2] - true[:2]) / rng < 0.08
+    (mapped,) = res.objects
+    assert mapped.cut_sides == ("top",) and obj.cut == ("top",)
+    sp, gc = mapped.cue("size_prior"), mapped.cue("ground_contact")
+    assert sp is not None and gc is not None and gc.sigma < sp.sigma
+    assert abs(mapped.fusion.distance - gc.distance) < abs(mapped.fusion.distance - sp.distance)  # type: ignore[union-attr]
+    assert obj.source.distances["ground_contact"] == pytest.approx(gc.distance)
+    # the reported sigma covers the remaining error along the ray
+    assert abs(float(mapped.center_cam[2]) - float(WORLD_FROM_CAM.inverse().apply(true)[2])) < 2 * mapped.sigma_z
