@@ -103,3 +103,14 @@ def test_an_assumed_focal_length_widens_every_sigma() -> None:
     assert out.objects[1].sigma is None and out.objects[0].position == a.position
     with pytest.raises(ValueError, match="rel"):
         widen_sigmas(Scene(objects=(a,)), float("nan"))
+
+
+def test_the_object_details_show_the_floor_cue_and_the_sigma() -> None:
+    from console.objects_view import describe
+
+    o = SceneObject("car-1", "car", (1.0, 2.0, 0.75), (1.6, 1.5, 3.9), sigma=1.25, cut=("bottom",),
+                    source=Source(capture="c", method="fused",
+                                  distances={"geometric": 15.0, "ground_contact": None, "depth": 13.0, "fused": 12.3}))
+    text = describe(o)
+    assert "| distance, ground contact | — |" in text and "| sigma along the ray | 1.25 m (cut: bottom) |" in text
+    assert "sigma along" not in describe(SceneObject("a", "chair", (0, 0, 0.4), (0.5, 0.8, 0.5)))
