@@ -38,7 +38,8 @@ from .client_notice import page_style, tell
 from .robot_view import RobotView, is_alert
 from .scene_watch import FrameError, NotReady, SceneWatcher, objects_to_world
 from .wording import plural
-from .session import JOB, NOTICE, SESSION_FILE, JobStatus, Notice, RobotSnapshot, Session, SessionError
+from .session import JOB, NOTICE, SESSION_FILE, JobStatus, Notice, Session, SessionError
+from .session_types import robot_snapshot
 
 log = logging.getLogger(__name__)
 
@@ -231,12 +232,7 @@ class ConsoleApp:
             if self._stopped.is_set():
                 return  # a late state while shutting down: the views are gone
             messages = tuple(getattr(st, "messages", ()))
-            session.set_robot(RobotSnapshot(
-                pose=st.pose, mode=getattr(st.mode, "value", str(st.mode)), armed=bool(st.armed),
-                battery=st.battery, healthy=bool(st.link_ok),
-                detail="" if st.health in ("", "ok") else str(st.health), stamp=float(st.time),
-                messages=messages, landed=None if getattr(st, "landed", None) is None else bool(st.landed),
-            ))
+            session.set_robot(robot_snapshot(st))
             with seen_lock:  # state arrives from the link's thread and from connect()
                 fresh = [text for number, text in messages if number > seen[0]]
                 seen[0] = max([seen[0]] + [number for number, _ in messages])

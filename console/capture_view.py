@@ -19,12 +19,13 @@ import viser
 from .objects_view import label_color
 from .photo_marks import BAR_WIDTH, depth_colorbar, draw_labels, photo_labels
 from .wording import plural
-from .session import CAPTURE, CaptureRecord, Session
+from .session import CAPTURE, SCENE, CaptureRecord, Session
 
 FRUSTUM_RGB = (0, 170, 220)
 PANEL_WIDTH = 480  # [px] of the pictures sent to the browser
 FRUSTUM_SCALE = 0.25  # size of the frustum drawn at the capture pose [m]
 FRUSTUM_PHOTO_ALPHA = 0.45  # opacity of the photo on the frustum: paths behind it stay in sight
+NO_CAPTURE = "<small>No capture yet: press <b>Capture & map</b>.</small>"
 
 
 def frustum_photo(image: np.ndarray, width: int = 240, alpha: float = FRUSTUM_PHOTO_ALPHA) -> np.ndarray:
@@ -113,10 +114,11 @@ class CaptureView:
         self._colors = colors
         self._lock = threading.Lock()
         gui = server.gui
-        self._caption = gui.add_markdown("<small>No capture yet: press <b>Capture & map</b>.</small>")
+        self._caption = gui.add_markdown(NO_CAPTURE)
         self._photo = gui.add_image(placeholder("no photo yet"), label="Photo and detections", format="jpeg")
         self._depth = gui.add_image(placeholder("no depth map yet"), label="Depth", format="jpeg")
         self._frustum: Any = None
+        self._shown: str | None = None  # id of the capture on screen
         session.subscribe(self._on_event)
         rec = session.capture
         if rec is not None:
@@ -125,6 +127,27 @@ class CaptureView:
     def _on_event(self, topic: str, payload: Any) -> None:
         if topic == CAPTURE and payload is not None:
             self.show(payload)
+        elif topic in (CAPTURE, SCENE) and self._session.capture is None:
+            self.clear()  # an undo of the first capture (or a load / replay seek before it) emptied it
+
+    def clear(self) -> None:
+        """Show no capture: placeholders in the panel, no frustum (when the session has none)."""
+        with self._lock:
+            if self._shown is None or self._session.capture is not None:
+                return
+            self._photo.image = placeholder("no photo yet")
+            self._depth.image = placeholder("no depth map yet")
+            self._caption.content = NO_CAPTURE
+            if self._frustum is not None:
+                self._frustum.remove()
+                self._frustum = None
+            self._shown = None
+
+    @property
+    def shown(self) -> str | None:
+        """Id of the capture on screen, or ``None`` when the panel shows none."""
+        with self._lock:
+            return self._shown
 
     def show(self, rec: CaptureRecord) -> None:
         """Display a capture."""
@@ -151,6 +174,7 @@ class CaptureView:
             self._photo.image = photo
             self._depth.image = depth
             self._caption.content = caption
+            self._shown = rec.id
             if self._frustum is not None:
                 self._frustum.remove()
             self._frustum = self._server.scene.add_camera_frustum(

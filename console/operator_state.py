@@ -12,9 +12,16 @@ The rules:
   there (restored, reconnected, the robot moved) is *stale*: :func:`route_note` says so and the
   operator has one action, *Re-plan from the robot*.
 - **Execute is enabled only for a mission that can run**; :func:`execute_blocker` gives the reason
-  otherwise (no robot state, link lost, robot moving, the mission starts elsewhere ...).
+  otherwise (no robot state, link lost, position unknown or stale, vehicle not ready to take off,
+  robot moving, the mission starts elsewhere ...).
+- **A position that is not known is never used**: while the link reports no valid position
+  (unknown before the first one, stale after its stream stopped), :func:`robot_origin` is
+  ``None`` (the route does not follow a placeholder, the launch spot is not moved) and
+  :func:`position_blocker` says why.
 - **Vehicle commands** (:func:`vehicle_commands`): Hold, Land here, Return and Disarm, shown
-  whenever the robot is armed or off the ground and no mission is driving it.
+  whenever the robot is armed or off the ground and no mission is driving it. Land here and
+  Return plan from the robot's position: off while it is unknown or stale; Return from the ground
+  (a take-off) also waits for readiness. Hold and Disarm need no position.
 - **Goals inside the robot's margin are refused** with the reason (:func:`goal_clearance`).
 - **A mission that ends in the air** is flagged (:func:`ends_in_air`) so the operator can add a landing.
 - **A mission whose remaining segments cross an obstacle** (:func:`remaining_blocked`) is ended and
@@ -60,9 +67,35 @@ def at_rest(robot: RobotSnapshot) -> bool:
     return robot.mode not in MOVING_MODES
 
 
+def position_blocker(robot: RobotSnapshot) -> str | None:
+    """Why the robot's reported position cannot be used (unknown or stale), or ``None``."""
+    status = getattr(robot, "position_status", "known")
+    if status == "unknown":
+        return "the robot's position is unknown (no valid position from the vehicle yet)"
+    if status == "stale":
+        return "the robot's position is stale (no valid position from the vehicle lately)"
+    return None
+
+
+def link_lost(robot: RobotSnapshot) -> str:
+    """The reason for a lost link (steady text: no ages that change with every sample)."""
+    return "the robot link is lost" + (": its position is stale" if getattr(robot, "position_status", "") == "stale"
+                                       else "")
+
+
+def readiness_blocker(robot: RobotSnapshot) -> str | None:
+    """Why the robot cannot take off now (its readiness), or ``None`` when it is ready."""
+    if getattr(robot, "ready", True):
+        return None
+    return "the robot is not ready: " + (getattr(robot, "readiness", "") or "the vehicle says so")
+
+
 def robot_origin(robot: RobotSnapshot, ws: Workspace) -> Vec3 | None:
     """Where the next candidate starts: the floor under the robot, or its position in the air
-    (world [m]); ``None`` when the robot is outside the workspace."""
+    (world [m]); ``None`` when the robot is outside the workspace or its position is not known
+    (:func:`position_blocker`)."""
+    if position_blocker(robot) is not None:
+        return None
     x, y, z = (float(v) for v in robot.pose.translation)
     p = (x, y, z) if airborne(robot, ws) else (x, y, ws.floor)
     return p if ws.contains(p) else None
@@ -96,7 +129,10 @@ def execute_blocker(mission: Mission | None, robot: RobotSnapshot | None, run: R
     if robot is None:
         return "no state from the robot yet"
     if not robot.healthy:
-        return "the robot link is lost"
+        return link_lost(robot)
+    why = position_blocker(robot) or readiness_blocker(robot)
+    if why is not None:
+        return why
     if not at_rest(robot):
         return f"the robot is {robot.mode.replace('_', ' ')}: wait until it stands or hovers"
     origin = robot_origin(robot, ws)
@@ -138,19 +174,24 @@ def vehicle_commands(robot: RobotSnapshot | None, run: RunStatus, ws: Workspace,
     if not (robot.armed or up):
         return off
     busy = "the mission is paused: abort it first" if run.active else ""
-    lost = "" if robot.healthy else "the robot link is lost"
+    lost = "" if robot.healthy else link_lost(robot)
     if run.state == "failsafe":  # the manager holds or lands the robot: nothing may interfere
         busy = "the failsafe is acting (holding, then landing): wait for it or abort the mission"
         lost = lost or busy
     out = {"hold": CommandState(True, not lost, lost)}
+    nowhere = position_blocker(robot) or ""  # Land here and Return plan from the position
     if up:
-        why = lost or busy
+        why = lost or nowhere or busy
         out["land"] = CommandState(True, not why, why)
     else:
         out["land"] = CommandState()
     origin = robot_origin(robot, ws)
     if launch is None:
         why = "the launch spot is unknown (the robot was never seen on the ground)"
+    elif lost or nowhere:
+        why = lost or nowhere
+    elif not up and readiness_blocker(robot):
+        why = readiness_blocker(robot) or ""
     elif origin is not None and not up and gap(origin, launch) <= START_TOLERANCE:
         why = "the robot is at the launch spot"
     elif origin is None:

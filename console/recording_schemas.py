@@ -113,11 +113,16 @@ def robot_messages(snap: RobotSnapshot) -> tuple[fm.PoseInFrame, fm.FrameTransfo
 
 
 def robot_json(snap: RobotSnapshot) -> dict[str, Any]:
-    """Everything in a :class:`RobotSnapshot`, pose as ``translation`` [m] + ``quaternion_xyzw``."""
+    """Everything in a :class:`RobotSnapshot`, pose as ``translation`` [m] + ``quaternion_xyzw``;
+    ``pose_age`` [s] is ``null`` while no position was ever known (``inf`` in the snapshot: JSON
+    has no infinity)."""
+    age = getattr(snap, "pose_age", 0.0)
     return {"translation": list(snap.pose.translation), "quaternion_xyzw": list(snap.pose.quaternion),
             "mode": snap.mode, "armed": snap.armed, "battery": snap.battery, "healthy": snap.healthy,
             "detail": snap.detail, "stamp": snap.stamp, "messages": [list(m) for m in snap.messages],
-            "landed": snap.landed}
+            "landed": snap.landed, "position_valid": bool(getattr(snap, "position_valid", True)),
+            "pose_age": float(age) if math.isfinite(age) else None, "ready": bool(getattr(snap, "ready", True)),
+            "readiness": str(getattr(snap, "readiness", "")), "warnings": list(getattr(snap, "warnings", ()))}
 
 
 # --- capture -----------------------------------------------------------------------------------------

@@ -3,6 +3,14 @@
 The twin is a low-poly aerial-ground robot (body, four arms with rotors, four legs, a camera at
 the front), modelled in the robot body frame (x forward, y left, z up; origin on the floor under
 the body centre) and moved to the reported ``world <- robot`` pose on every state update.
+
+What the link says about its position is never drawn as more than it is
+(:attr:`~console.session_types.RobotSnapshot.position_status`): a *known* pose shows the coloured
+twin; a *stale* one (its stream stopped) shows a grey twin at the last valid pose labelled
+``POSITION STALE``; an *unknown* one (no valid position yet: the pose is only a placeholder)
+hides the twin and the status line says ``position unknown``. The status line also shows why the
+vehicle is not ready to take off (position estimate, EKF, pre-arm) and the link's standing
+warnings (vehicle identity, failsafe parameters, a moved EKF origin ...).
 """
 
 from __future__ import annotations
@@ -30,6 +38,7 @@ ARM_RGB = (110, 118, 130)
 ROTOR_RGB = (0, 170, 220)
 LEG_RGB = (230, 120, 30)
 CAMERA_RGB = (20, 20, 24)
+STALE_RGB = (150, 150, 156)  # the whole twin while its pose is stale
 MIN_INTERVAL = 0.05  # at most 20 pose updates per second [s]
 
 
@@ -85,22 +94,71 @@ def _message_color(message: str) -> str:
     return "#d62728" if is_alert(message) else "#666666"
 
 
+def stale_mesh() -> trimesh.Trimesh:
+    """The twin in grey, drawn at a stale pose (same frame as :func:`robot_mesh`)."""
+    mesh = robot_mesh()
+    mesh.visual.face_colors = np.tile([*STALE_RGB, 255], (len(mesh.faces), 1))
+    return mesh
+
+
+def _reason(detail: str, prefix: str, bracketed: bool) -> str:
+    """What the link's health text says after ``prefix``: all of it, or only its closing bracket."""
+    rest = detail[len(prefix):].lstrip(":").strip() if detail.startswith(prefix) else ""
+    if bracketed:
+        return rest[rest.index("(") + 1:-1] if "(" in rest and rest.endswith(")") else ""
+    return rest
+
+
+def position_text(r: RobotSnapshot) -> str:
+    """The pose line of the panel (HTML): the pose, the stale pose marked, or "position unknown",
+    with the link's reason (taken from its health text, which is then not repeated)."""
+    x, y, z = r.pose.translation
+    where = f"({x:.2f}, {y:.2f}, {z:.2f}) m, yaw {math.degrees(r.pose.yaw):.0f}°"
+    status = r.position_status
+    if status == "unknown":
+        why = _reason(r.detail, "position unknown", False) or "no valid position from the vehicle yet"
+        return f"<b style='color:#d62728'>position unknown</b>: {html.escape(why)} (twin hidden)"
+    if status == "stale":
+        why = _reason(r.detail, "stale", True)
+        return (f"<b style='color:#d62728'>position stale</b>: no valid position for {r.pose_age:.1f} s"
+                + (f" ({html.escape(why)})" if why else "")
+                + f"; last valid pose {where} (grey twin)")
+    return f"pose {where}"
+
+
+def trust_text(r: RobotSnapshot) -> str:
+    """Readiness (while not ready) and the link's standing warnings, as panel lines (HTML)."""
+    out = ""
+    if not r.ready:
+        out += ("<br><span style='color:#b35c00'><b>not ready to take off</b>: "
+                f"{html.escape(r.readiness or 'the vehicle says so')}</span>")
+    out += "".join(f"<br><span style='color:#d62728'>⚠ {html.escape(w)}</span>" for w in r.warnings)
+    return out
+
+
 def status_text(r: RobotSnapshot | None, link_name: str) -> str:
     """One status line for the panel (HTML)."""
     if r is None:
         return f"<small>robot <b>{html.escape(link_name)}</b>: waiting for the first state…</small>"
-    x, y, z = r.pose.translation
-    health = "<b style='color:#2a9d4b'>link ok</b>" if r.healthy else "<b style='color:#d62728'>LINK LOST</b>"
+    status = r.position_status
+    shown_detail = r.detail
+    if status == "stale" and r.detail.startswith("stale:"):  # heard, but no fresh pose: counts as link loss
+        health, shown_detail = "<b style='color:#d62728'>LINK LOST: position stale</b>", ""
+    elif r.healthy:
+        health = "<b style='color:#2a9d4b'>link ok</b>"
+    else:
+        health = "<b style='color:#d62728'>LINK LOST</b>"
+    if status == "unknown" and r.detail.startswith("position unknown"):
+        shown_detail = ""  # the pose line says it
     battery = "battery ?" if r.battery is None else f"battery {100 * r.battery:.0f}%"
     armed = "armed" if r.armed else "disarmed"
     age = time.time() - r.stamp
     stale = f" · <b style='color:#d62728'>{age:.0f} s old</b>" if age > 2.0 else ""
-    detail = f"<br>{html.escape(r.detail)}" if r.detail else ""
+    detail = f"<br>{html.escape(shown_detail)}" if shown_detail else ""
     said = "".join(f"<br><span style='color:{_message_color(t)}'>{html.escape(t)}</span>"
                    for _, t in r.messages[-MESSAGES_SHOWN:])
     return (f"<small>robot <b>{html.escape(link_name)}</b> · {health} · {html.escape(mode_text(r.mode))} · {armed} · "
-            f"{battery}{stale}<br>pose ({x:.2f}, {y:.2f}, {z:.2f}) m, yaw {math.degrees(r.pose.yaw):.0f}°"
-            f"{detail}{said}</small>")
+            f"{battery}{stale}<br>{position_text(r)}{detail}{trust_text(r)}{said}</small>")
 
 
 class RobotView:
@@ -136,7 +194,9 @@ class RobotView:
                 self._buttons[name] = b
             self._why_not = server.gui.add_markdown("")
         self._frame = server.scene.add_frame("/robot", show_axes=False, visible=False)
-        server.scene.add_mesh_trimesh("/robot/twin", robot_mesh())
+        self._twin = server.scene.add_mesh_trimesh("/robot/twin", robot_mesh())
+        self._stale_twin = server.scene.add_mesh_trimesh("/robot/twin_stale", stale_mesh(), visible=False)
+        self._drawn_key: tuple[Any, ...] = ()  # what the operator must see at once (no throttle) when it changes
         self._label = server.scene.add_label("/robot/label", "robot", position=(0.0, 0.0, 0.55),
                                              anchor="bottom-center", font_screen_scale=0.8)
         session.subscribe(self._on_event)
@@ -178,15 +238,39 @@ class RobotView:
             self._why_not.content = "".join(f"<small style='color:#b35c00'>{html.escape(r)}</small><br>" for r in off)
 
     def show(self, r: RobotSnapshot, force: bool = False) -> None:
-        """Move the twin to ``r.pose`` (throttled) and refresh the status line."""
+        """Move the twin to ``r.pose`` (throttled; a change of position status, link health,
+        readiness, warnings or mode is drawn at once), grey it while the pose is stale, hide it while
+        unknown, and refresh the status line."""
         now = time.monotonic()
+        status = r.position_status
+        key = (status, r.healthy, r.ready, r.readiness, r.warnings, r.mode, r.armed)
         with self._lock:
-            if not force and now - self._last < MIN_INTERVAL:
+            if not force and key == self._drawn_key and now - self._last < MIN_INTERVAL:
                 return
-            self._last = now
-            q = r.pose.quaternion  # x, y, z, w
-            self._frame.position = r.pose.translation
-            self._frame.wxyz = (q[3], q[0], q[1], q[2])
-            self._frame.visible = True
-            self._label.text = f"robot · {mode_text(r.mode)}" + ("" if r.healthy else " · LINK LOST")
+            self._last, self._drawn_key = now, key
+            if status == "unknown":
+                self._frame.visible = False  # the pose is a placeholder: nothing to draw
+            else:
+                q = r.pose.quaternion  # x, y, z, w
+                self._frame.position = r.pose.translation
+                self._frame.wxyz = (q[3], q[0], q[1], q[2])
+                self._twin.visible = status == "known"
+                self._stale_twin.visible = status == "stale"
+                self._frame.visible = True
+            self._label.text = (f"robot · {mode_text(r.mode)}" + ("" if r.healthy else " · LINK LOST")
+                                + (" · POSITION STALE" if status == "stale" else ""))
             self._status.content = status_text(r, self._link_name)
+
+    @property
+    def twin_shown(self) -> str:
+        """Which twin is in the 3D view: ``known`` (coloured), ``stale`` (grey) or ``hidden``."""
+        with self._lock:
+            if not self._frame.visible:
+                return "hidden"
+            return "stale" if self._stale_twin.visible else "known"
+
+    @property
+    def status(self) -> str:
+        """The status line as shown (HTML)."""
+        with self._lock:
+            return str(self._status.content)

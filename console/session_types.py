@@ -7,9 +7,10 @@ optical frame (x right, y down, z forward).
 
 from __future__ import annotations
 
+import math
 import time
 from dataclasses import dataclass, field
-from typing import Mapping, Sequence
+from typing import Any, Mapping, Sequence
 
 import numpy as np
 
@@ -97,6 +98,14 @@ class RobotSnapshot:
         messages: The robot's latest status messages, oldest first, ``(number, "SEVERITY: text")``.
         landed: Whether the robot stands on the ground as the link reports it, or ``None`` when
             unknown (the rules then judge by its height).
+        position_valid: Whether ``pose`` is a fresh, valid estimate. When False, ``pose`` is the
+            last valid one while stale (``pose_age`` finite) or only a placeholder when no position
+            was ever known (``pose_age`` infinite): never draw or plan from it as if known.
+        pose_age: Time since the last valid position [s], ``inf`` before the first (never written
+            to JSON as such: the recorder writes ``null``).
+        ready: Whether the robot can take off now (position estimate, EKF, pre-arm checks).
+        readiness: Why it is not ready (``""`` when ready).
+        warnings: Standing warnings about the link or the vehicle, for the robot panel.
     """
 
     pose: Pose
@@ -108,6 +117,53 @@ class RobotSnapshot:
     stamp: float = field(default_factory=time.time)
     messages: tuple[tuple[int, str], ...] = ()
     landed: bool | None = None
+    position_valid: bool = True
+    pose_age: float = 0.0
+    ready: bool = True
+    readiness: str = ""
+    warnings: tuple[str, ...] = ()
+
+    def __post_init__(self) -> None:
+        age = self.pose_age
+        if not isinstance(age, (int, float)) or math.isnan(age) or age < 0:
+            raise ValueError(f"pose_age: must be >= 0 s or inf, got {age!r}")
+
+    @property
+    def position_status(self) -> str:
+        """``known`` (fresh and valid), ``stale`` (the last valid pose, too old) or ``unknown``
+        (no valid position ever: the pose is a placeholder)."""
+        if self.position_valid:
+            return "known"
+        return "stale" if math.isfinite(self.pose_age) else "unknown"
+
+
+def trust_fields(state: Any) -> dict[str, Any]:
+    """The position validity, readiness and warnings of a link's ``RobotState`` as
+    :class:`RobotSnapshot` keyword arguments (a link without them counts as valid and ready).
+
+    ``pose_age`` NaN or negative becomes ``inf`` (unknown) rather than a false "fresh"."""
+    age = getattr(state, "pose_age", 0.0)
+    try:
+        age = float(age)
+    except (TypeError, ValueError):
+        age = math.inf
+    if math.isnan(age) or age < 0:
+        age = math.inf
+    valid = bool(getattr(state, "position_valid", True))
+    return {"position_valid": valid, "pose_age": age, "ready": bool(getattr(state, "ready", True)),
+            "readiness": str(getattr(state, "readiness", "") or ""),
+            "warnings": tuple(str(w) for w in (getattr(state, "warnings", ()) or ()))}
+
+
+def robot_snapshot(state: Any) -> RobotSnapshot:
+    """A link's ``RobotState`` (:class:`console.link.base.RobotState`) as the session's snapshot."""
+    landed = getattr(state, "landed", None)
+    return RobotSnapshot(
+        pose=state.pose, mode=getattr(state.mode, "value", str(state.mode)), armed=bool(state.armed),
+        battery=state.battery, healthy=bool(state.link_ok),
+        detail="" if state.health in ("", "ok") else str(state.health), stamp=float(state.time),
+        messages=tuple(getattr(state, "messages", ())), landed=None if landed is None else bool(landed),
+        **trust_fields(state))
 
 
 @dataclass(frozen=True)
