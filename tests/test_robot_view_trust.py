@@ -22,6 +22,7 @@ import numpy as np
 import pytest
 import viser
 from mcap.reader import make_reader
+from mcap_protobuf.decoder import DecoderFactory
 
 from console import operator_state as rules
 from console.capture_view import NO_CAPTURE, CaptureView
@@ -203,7 +204,8 @@ def test_no_non_finite_value_reaches_session_json_or_the_recording(tmp_path: Pat
     assert saved["route"]  # the session really was written
     files = sorted((tmp_path / "rec").glob("*.mcap"))
     assert files
-    states, poses = [], 0
+    states, poses = [], []
+    decoders = DecoderFactory()
     for path in files:
         with open(path, "rb") as f:
             for schema, channel, message in make_reader(f).iter_messages(log_time_order=True):
@@ -212,13 +214,15 @@ def test_no_non_finite_value_reaches_session_json_or_the_recording(tmp_path: Pat
                     if channel.topic == "/robot/state":
                         states.append(d)
                 elif channel.topic == "/robot/pose":
-                    poses += 1
+                    p = decoders.decoder_for("protobuf", schema)(message.data).pose.position
+                    poses.append((p.x, p.y, p.z))
     unknown = [s for s in states if not s["position_valid"] and s["pose_age"] is None]
     stale = [s for s in states if not s["position_valid"] and s["pose_age"] is not None]
     assert unknown and unknown[0]["warnings"] == list(WARNINGS) and unknown[0]["readiness"] == NOT_READY
     assert stale and stale[0]["pose_age"] == pytest.approx(3.2)
     assert states[-1]["position_valid"] and states[-1]["ready"]
-    assert poses == 2  # the stale and the known pose; none for the placeholder
+    assert poses and poses[0] == pytest.approx(START)  # the robot as the recording began
+    assert all(math.dist(p, NED_ORIGIN) > 1.0 for p in poses), poses  # never the placeholder as a pose
 
 
 def _capture(cid: str) -> CaptureRecord:
