@@ -6,10 +6,12 @@ robot-frame (x forward, y left, z up) centres and the distance estimates in each
 and per-stage wall times [s] in the capture. It never writes files: save with
 :meth:`Scene.save <pipeline.scene.Scene.save>` (atomic) once mapping succeeded.
 
-Stages (timing keys): ``detect`` and ``depth`` run concurrently with the segmenter's image encoder
-(``segment_encoder``); then one decoder run per box (``segment_decoder``); then ``distance`` (size
-prior, depth-scale fitting, fusion, placement). ``total`` is the wall time. With
-``MapperConfig.segment = "auto"`` the encoder runs only when a detection needs its mask (see there).
+Stages (timing keys), in the order they are announced to ``on_stage`` (:mod:`pipeline.stage_progress`):
+``detect``; ``segment`` (the segmenter's image encoder, ``segment_encoder``, then one decoder run per
+box, ``segment_decoder``); ``depth``; ``distance`` (size prior, depth-scale fitting, fusion,
+placement). ``total`` is the wall time. With ``MapperConfig.segment = "auto"`` (the default) the
+encoder runs only when a detection needs its mask (see there). The stages run one after another;
+with ``MapperConfig.parallel`` detection, depth and (``segment="all"``) the encoder run concurrently.
 """
 
 from __future__ import annotations
@@ -35,6 +37,7 @@ from pipeline.models.nms import nms
 from pipeline.placement import heading_in_frame
 from pipeline.ranging import MappedObject, Ranger
 from pipeline.scene import Capture, Scene, SceneObject, Source
+from pipeline.segment_policy import mask_wanted
 from pipeline.stage_progress import StageCallback, stage_reporter
 from pipeline.tiled_detection import detect_tiled
 
@@ -172,9 +175,8 @@ class Mapper:
         report("segment")
         if enc_future is not None:
             enc_future.result()
-        wanted = [
-            segmenter is not None and det.score >= cfg.segment_min_score and det.width >= 2 and det.height >= 2
-            and (cfg.segment == "all" or ranger.needs_mask(det, w, h))
+        wanted = [  # see pipeline.segment_policy
+            segmenter is not None and mask_wanted(cfg, det, w, h, ranger.needs_mask, self._exact_depth)
             for det in detections
         ]
         if segmenter is not None and not early and any(wanted):

@@ -51,12 +51,15 @@ class MapperConfig:
         truncation_margin_px: A box side within this many pixels of the border is cut [px].
         handle_truncation: Use only box dimensions the image border does not cut (``False``: the
             paper's plain ``f * h / h_px`` whatever the border does).
-        segment: ``all``: segment every detection (one encoder run, one decoder run per box).
-            ``auto``: segment only detections whose distance depends on the mask (unknown size, or
-            both box dimensions cut by the border), skipping the encoder when none does: a known-size
-            object's distance comes from its box, and the median depth over the middle of the box is
+        segment: ``auto`` (default): segment only detections whose distance depends on the mask
+            (unknown size, or both box dimensions cut by the border) or whose yaw is fitted to the
+            mask's depth points (see :mod:`pipeline.segment_policy`), skipping the encoder when none
+            does: a known-size object's distance comes from its box, and the median depth over the middle of the box is
             nearly as good as over the mask (dev set, dataset boxes: median error 10.0 % against
-            9.4 %). ``none``: the box stands in for every mask.
+            9.4 %); on the dev set ``auto`` and ``all`` give the same median error, with and without
+            dataset boxes, at 1/50 of the time (README, "Mapping speed"). ``all``: segment every
+            detection (one encoder run, one decoder run per box; the default until then). ``none``:
+            the box stands in for every mask.
         segment_min_score: Only detections at least this confident are segmented.
         max_objects: At most this many detections (best first) are mapped.
         fit_depth: Fit the depth map's scale (and shift for inverse depth) from the objects of known
@@ -66,7 +69,9 @@ class MapperConfig:
         size_sigma: Relative spread of real sizes around the catalog's ``(w, h, l)`` (box fit).
         horizontal_sigma_scale: How much less the 2D box's left/right edges are trusted than its
             top/bottom (box fit): a box's width depends on the unknown yaw and on non-box shapes.
-        parallel: Run detection, depth and the segmenter's encoder concurrently (threads).
+        parallel: Run detection, depth and (``segment="all"``) the segmenter's encoder concurrently
+            (threads). Off by default: on 2 cores it bought nothing (``bench/pipeline_speed.py``:
+            0.94x the sequential run with ``auto``, 0.96x with ``all``); kept for that benchmark.
         detect_tile_factor: For a detector with a fixed input size (``input_size``, e.g. YOLOX's
             416 px), photos whose longer side exceeds 1.25 tiles are also detected on overlapping
             tiles of ``detect_tile_factor`` times that size (small far objects, see
@@ -119,14 +124,14 @@ class MapperConfig:
     placement: Literal["box_fit", "ray"] = "box_fit"
     truncation_margin_px: float = 3.0
     handle_truncation: bool = True
-    segment: Literal["all", "auto", "none"] = "all"
+    segment: Literal["all", "auto", "none"] = "auto"
     segment_min_score: float = 0.0
     max_objects: int = 100
     fit_depth: bool = True
     refit_metric_min_refs: int = 2
     size_sigma: tuple[float, float, float] = (0.1, 0.1, 0.1)
     horizontal_sigma_scale: float = 4.0
-    parallel: bool = True
+    parallel: bool = False
     detect_tile_factor: float | None = 1.5
     same_object_iou: float | None = 0.8
     fusion: Literal["fixed", "adaptive", "sigma"] = "sigma"

@@ -119,7 +119,7 @@ def _by_label(scene: Any) -> dict[str, Any]:
 
 @pytest.mark.parametrize("placement", ["box_fit", "ray"])
 def test_objects_land_at_their_world_positions(placement: str) -> None:
-    with Mapper(gt_bundle(MetricModelDepth()), CATALOG, MapperConfig(placement=placement)) as mapper:
+    with Mapper(gt_bundle(MetricModelDepth()), CATALOG, MapperConfig(placement=placement, segment="all")) as mapper:
         result = mapper.run(SCENE["image"], INTR, MOUNT, ROBOT, capture_id="cap-1")
     scene = result.scene
     objs = _by_label(scene)
@@ -195,10 +195,15 @@ def test_relative_depth_without_reference_objects_places_nothing() -> None:
 
 
 def test_segment_auto_runs_the_segmenter_only_for_objects_that_need_a_mask() -> None:
-    with Mapper(gt_bundle(), CATALOG, MapperConfig(segment="auto")) as mapper:
+    assert MapperConfig().segment == "auto"  # the default
+    with Mapper(gt_bundle(MetricModelDepth()), CATALOG, MapperConfig(segment="auto")) as mapper:
         result = mapper.run(SCENE["image"], INTR, MOUNT, ROBOT)
     masked = {o.detection.label for o in result.objects if o.mask is not None}
     assert masked == {"rock"}  # unknown size: its extent comes from the mask
+    # exact depth (a simulator's ground truth): every known-size object's yaw is fitted to its mask's depth points
+    with Mapper(gt_bundle(), CATALOG, MapperConfig(segment="auto")) as mapper:
+        result = mapper.run(SCENE["image"], INTR, MOUNT, ROBOT)
+    assert {o.detection.label for o in result.objects if o.mask is not None} == {"rock", "crate", "barrel"}
 
 
 def test_prompts_select_classes_and_free_words_become_classes() -> None:
@@ -362,7 +367,7 @@ def test_offline_models_map_a_real_bedroom() -> None:
     catalog = Catalog.load()
     sample = next(s for s in load_dataset(SHARED / "bench" / "dev", catalog) if s.id == "sunrgbd/000017")
     models = load_mapping_models("offline", SHARED / "models", catalog)
-    with Mapper(models, catalog) as mapper:
+    with Mapper(models, catalog, MapperConfig(segment="all")) as mapper:  # every object through MobileSAM
         result = mapper.run(load_image(sample.image_path), sample.intrinsics, mount_from_gravity(sample.gravity_cam))
     scene = result.scene
     assert scene.objects, "no object found in a photo of a bed"
