@@ -124,7 +124,22 @@ def _robot(d: Any, pose: Pose | None) -> RobotSnapshot:
     return RobotSnapshot(pose=pose if pose is not None else _pose(d, "/robot/state"), mode=str(d["mode"]),
                          armed=bool(d["armed"]), battery=None if d["battery"] is None else float(d["battery"]),
                          healthy=bool(d["healthy"]), detail=str(d["detail"]), stamp=float(d["stamp"]),
-                         messages=tuple((int(n), str(t)) for n, t in d["messages"]), landed=d["landed"])
+                         messages=tuple((int(n), str(t)) for n, t in d["messages"]), landed=d["landed"],
+                         **_trust(d))
+
+
+def _trust(d: Any) -> dict[str, Any]:
+    """Position validity, readiness and warnings of a ``/robot/state`` record (absent in older
+    recordings: valid and ready); ``pose_age`` ``null`` means no position was ever known (inf)."""
+    age = d.get("pose_age", 0.0)
+    if age is not None and (isinstance(age, bool) or not isinstance(age, (int, float)) or not age >= 0):
+        raise ValueError(f"pose_age: must be a number >= 0 or null, got {age!r}")
+    for key in ("position_valid", "ready"):
+        if not isinstance(d.get(key, True), bool):
+            raise ValueError(f"{key}: must be true or false, got {d[key]!r}")
+    return {"position_valid": d.get("position_valid", True), "pose_age": float("inf") if age is None else float(age),
+            "ready": d.get("ready", True), "readiness": str(d.get("readiness", "")),
+            "warnings": tuple(str(w) for w in d.get("warnings", ()))}
 
 
 class Recording:

@@ -29,6 +29,7 @@ from console.capture_view import NO_CAPTURE, CaptureView
 from console.link.base import Mode, RobotState
 from console.mission_view import MissionView
 from console.recording import Recorder
+from console.replay import Recording
 from console.robot_view import RobotView
 from console.session import CaptureRecord, Detection, RobotSnapshot, Session
 from console.session_types import robot_snapshot
@@ -223,6 +224,12 @@ def test_no_non_finite_value_reaches_session_json_or_the_recording(tmp_path: Pat
     assert states[-1]["position_valid"] and states[-1]["ready"]
     assert poses and poses[0] == pytest.approx(START)  # the robot as the recording began
     assert all(math.dist(p, NED_ORIGIN) > 1.0 for p in poses), poses  # never the placeholder as a pose
+
+    replayed = Recording(files[0])  # read back: the unknown state is unknown again (null -> inf)
+    seen = [replayed.state_at(ns).robot for ns in replayed.times("/robot/state")]
+    assert [r.position_status for r in seen if r is not None][:4] == ["known", "unknown", "stale", "known"]
+    back = next(r for r in seen if r is not None and r.position_status == "unknown")
+    assert math.isinf(back.pose_age) and back.warnings == WARNINGS and back.readiness == NOT_READY
 
 
 def _capture(cid: str) -> CaptureRecord:
