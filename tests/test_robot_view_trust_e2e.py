@@ -52,4 +52,6 @@ def test_the_console_shows_an_unknown_then_known_then_stale_position(tmp_path: P
             why = session.operator_state().execute_blocker
             assert why is not None and "stale" in why
     finally:
+        if app.preload is not None:  # a model still loading in a daemon thread aborts the interpreter at exit
+            app.preload.join(120)
         app.stop()
