@@ -258,3 +258,16 @@ def test_undoing_the_first_capture_clears_the_camera_panel(server: viser.ViserSe
     assert session.capture is None
     assert view.shown is None and not view.has_frustum
     assert view._caption.content == NO_CAPTURE
+
+
+def test_a_placeholder_pose_is_never_the_launch_spot_or_the_route_start(tmp_path: Path) -> None:
+    session = Session(tmp_path / "session", start=START, autosave=False)
+    session.set_robot(_unknown())  # disarmed on the ground at the placeholder (NED origin)
+    assert session.operator_state().launch is None
+    assert session.route_snapshot().start == pytest.approx(START)
+    assert rules.robot_origin(session.robot, session.workspace) is None  # type: ignore[arg-type]
+    session.set_robot(_stale((3.0, 1.0, 0.0)))
+    assert session.operator_state().launch is None and session.route_snapshot().start == pytest.approx(START)
+    session.set_robot(_known((3.0, 1.0, 0.0)))  # known: the route follows, the launch spot is set
+    assert session.operator_state().launch == pytest.approx((3.0, 1.0, 0.0))
+    assert session.route_snapshot().start == pytest.approx((3.0, 1.0, 0.0))
