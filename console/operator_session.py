@@ -234,7 +234,8 @@ class OperatorRules:
                 raise SessionError("no state from the robot yet: cannot plan from it")
             origin = rules.robot_origin(r, self._workspace)  # type: ignore[attr-defined]
             if origin is None:
-                raise SessionError("the robot is outside the workspace: cannot plan from it")
+                where = rules.position_blocker(r) or "the robot is outside the workspace"  # type: ignore[attr-defined]
+                raise SessionError(f"{where}: cannot plan from it")
             goals = [g for g in self.route_snapshot().goals if rules.gap(g, origin) > rules.START_TOLERANCE]  # type: ignore[attr-defined]
             notes = self._replan_locked(origin, goals, rebuild=self._mission is not None)  # type: ignore[attr-defined]
             self._save_locked()  # type: ignore[attr-defined]

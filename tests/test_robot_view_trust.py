@@ -31,7 +31,7 @@ from console.mission_view import MissionView
 from console.recording import Recorder
 from console.replay import Recording
 from console.robot_view import RobotView
-from console.session import CaptureRecord, Detection, RobotSnapshot, Session
+from console.session import CaptureRecord, Detection, RobotSnapshot, Session, SessionError
 from console.session_types import robot_snapshot
 from console.vehicle_commands import VehicleCommands
 from pipeline.geometry import Intrinsics, Pose
@@ -271,3 +271,6 @@ def test_a_placeholder_pose_is_never_the_launch_spot_or_the_route_start(tmp_path
     session.set_robot(_known((3.0, 1.0, 0.0)))  # known: the route follows, the launch spot is set
     assert session.operator_state().launch == pytest.approx((3.0, 1.0, 0.0))
     assert session.route_snapshot().start == pytest.approx((3.0, 1.0, 0.0))
+    session.set_robot(_unknown())
+    with pytest.raises(SessionError, match="position is unknown.*cannot plan from it"):
+        session.replan_from_robot()
