@@ -70,8 +70,9 @@ class MapperConfig:
         horizontal_sigma_scale: How much less the 2D box's left/right edges are trusted than its
             top/bottom (box fit): a box's width depends on the unknown yaw and on non-box shapes.
         parallel: Run detection, depth and (``segment="all"``) the segmenter's encoder concurrently
-            (threads). Off by default: on 2 cores it bought nothing (``bench/pipeline_speed.py``:
-            0.94x the sequential run with ``auto``, 0.96x with ``all``); kept for that benchmark.
+            (threads). Off by default: on 2 cores it bought no consistent gain
+            (``bench/pipeline_speed.py`` on the loaded machine: 0.94x and 1.13x the sequential run
+            with ``auto`` in two runs, 0.96x and 0.98x with ``all``); kept for that benchmark.
         detect_tile_factor: For a detector with a fixed input size (``input_size``, e.g. YOLOX's
             416 px), photos whose longer side exceeds 1.25 tiles are also detected on overlapping
             tiles of ``detect_tile_factor`` times that size (small far objects, see
