@@ -202,6 +202,12 @@ class ConsoleApp:
             except Exception:
                 log.exception("error while stopping")
         self._closers.clear()
+        # a model being loaded cannot be interrupted, and a process that exits while onnxruntime builds a
+        # session in a daemon thread aborts ('terminate called without an active exception'): let it end
+        if self.preload is not None and not self.preload.join(0.0):
+            log.info("waiting for the model loading to end before stopping")
+            if not self.preload.join(120.0):
+                log.warning("the model loading did not end within 120 s")
 
     def serve_forever(self) -> None:
         """Block until Ctrl-C, then stop."""

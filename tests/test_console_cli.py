@@ -171,3 +171,28 @@ def test_a_captures_folder_with_a_resized_photo_stops_the_console_at_start(
     code = main(["console", "--captures", str(photos), "--session", str(tmp_path / "s"), "--port", "0"])
     err = capsys.readouterr().err
     assert code == 2 and "small.json: 'width' is required" in err and "Traceback" not in err
+
+
+def test_a_console_stopped_while_its_models_load_exits_cleanly(tmp_path: Path) -> None:
+    """Stopping the console while the background model loading runs waits for it: the process exits 0
+    (an interpreter exiting under onnxruntime's session build aborts with 'terminate called ...')."""
+    import subprocess
+    import sys
+
+    from mav_emulator import free_udp_port
+
+    code = (
+        "import sys; from pathlib import Path; from console.app import ConsoleApp, ConsoleConfig\n"
+        f"cfg = ConsoleConfig(robot='mavlink:udpin:127.0.0.1:{free_udp_port()}', session_dir=Path(sys.argv[1]),"
+        " port=0, fresh=True)\n"
+        "app = ConsoleApp(cfg).start()\n"
+        "print('before', app.preload.state, flush=True)\n"
+        "app.stop()\n"
+        "print('after', app.preload.state, flush=True)\n"
+    )
+    proc = subprocess.run([sys.executable, "-c", code, str(tmp_path / "s")], capture_output=True, text=True,
+                          timeout=600, cwd=Path(__file__).resolve().parents[1])
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    assert "terminate called" not in proc.stderr
+    states = dict(line.split() for line in proc.stdout.splitlines() if line.startswith(("before ", "after ")))
+    assert states["after"] in ("ready", "failed"), states  # stop() waited for the loading to end
