@@ -179,8 +179,8 @@ def test_a_tcp_reconnect_is_detected_and_the_streams_are_asked_for_again() -> No
         emu.streaming = set()  # a restarted vehicle forgot the rates
         assert eventually(lambda: link.latest_state().link_epoch >= 1, 10.0)
         assert any("transport reconnected" in w for w in link.latest_state().warnings)
+        assert eventually(lambda: len(emu.record.intervals) > asked, 10.0), emu.record.intervals  # asked again
         assert eventually(lambda: link.latest_state().health == "ok", 10.0)
-        assert len(emu.record.intervals) > asked
     finally:
         link.close()
         emu.stop()
