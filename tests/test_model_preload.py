@@ -90,6 +90,8 @@ def test_the_console_starts_and_stays_up_when_the_weights_are_missing(tmp_path: 
         assert app.session is not None
         assert _wait_until(lambda: app.session.job.error is not None)
         assert app.session.job.name == PRELOAD_NAME and "morphonavi models fetch" in app.session.job.error
+        # the page's job line (the view's markdown handle) shows the failure and its cure
+        assert _wait_until(lambda: "failed" in app._job_md.content and "models fetch" in app._job_md.content)
         with urllib.request.urlopen(app.url, timeout=30) as page:  # the page is still served
             assert page.status == 200
     finally:
