@@ -157,7 +157,8 @@ class Mapper:
         report = stage_reporter(on_stage)
         early = segmenter is not None and cfg.segment == "all" and cfg.parallel
         enc_future = self._submit(segmenter.set_image, image, timings, "segment_encoder") if early else None
-        depth_future = self._submit(depth_model.estimate, image, timings, "depth") if depth_model and cfg.parallel else None
+        depth_future = (self._submit(depth_model.estimate, image, timings, "depth")
+                        if depth_model is not None and cfg.parallel else None)
         report("detect")
         tile_px = self._tile_px()
         if tile_px is None:
