@@ -36,6 +36,14 @@ def _mission(walk_to: float = 3.0, height: float = 1.75) -> Mission:
     ))
 
 
+def _until(cond, what: str, timeout: float = 60.0) -> None:
+    """Poll ``cond`` (every 5 ms) until true; fails, naming ``what``, after ``timeout`` [s] (never hangs)."""
+    deadline = time.monotonic() + timeout
+    while not cond():
+        assert time.monotonic() < deadline, f"timed out waiting for {what}"
+        time.sleep(0.005)
+
+
 @pytest.fixture
 def robot():
     r = _robot()
@@ -92,15 +100,23 @@ def test_start_refuses_a_mission_planned_elsewhere(robot: SimRobot) -> None:
         MissionManager(robot).start(far)
 
 
-def test_pause_holds_and_resume_continues_from_where_it_stopped(robot: SimRobot) -> None:
+def test_pause_holds_and_resume_continues_from_where_it_stopped() -> None:
+    # real time: the flight past y = 3.5 lasts 1 s, a window a loaded machine's test thread does not miss
+    robot = _robot(time_scale=1.0)
+    try:
+        _pause_and_resume(robot)
+    finally:
+        robot.close()
+
+
+def _pause_and_resume(robot: SimRobot) -> None:
     manager = MissionManager(robot)
     ys: list[tuple[SegmentKind | None, float]] = []
     robot.subscribe(lambda s: ys.append((manager.progress().kind, s.position[1])))
     manager.start(_mission())
-    while not (manager.progress().kind is FLY and robot.latest_state().position[1] > 3.5):
-        time.sleep(0.005)
+    _until(lambda: manager.progress().kind is FLY and robot.latest_state().position[1] > 3.5, "flying past y 3.5")
     manager.pause()
-    assert manager.wait(5.0) is MissionStatus.PAUSED
+    assert manager.wait(30.0) is MissionStatus.PAUSED
     held = robot.latest_state()
     assert held.mode is Mode.HOLDING and not held.landed
     time.sleep(0.3)
@@ -109,12 +125,11 @@ def test_pause_holds_and_resume_continues_from_where_it_stopped(robot: SimRobot)
         manager.start(_mission())  # one mission at a time
     manager.resume()
     # a second pause in the same flight, past its middle waypoint
-    while robot.latest_state().position[1] < 4.3:
-        time.sleep(0.005)
+    _until(lambda: robot.latest_state().position[1] >= 4.3, "past y 4.3")
     manager.pause()
-    assert manager.wait(5.0) is MissionStatus.PAUSED
+    assert manager.wait(30.0) is MissionStatus.PAUSED
     manager.resume()
-    assert manager.wait(30.0) is MissionStatus.DONE
+    assert manager.wait(60.0) is MissionStatus.DONE
     assert robot.latest_state().position == pytest.approx(SEARCH_GOAL)
     # the flight never went back towards its start after the pauses
     fly = [y for k, y in ys if k is FLY]
@@ -123,13 +138,20 @@ def test_pause_holds_and_resume_continues_from_where_it_stopped(robot: SimRobot)
         manager.resume()
 
 
-def test_abort_stops_for_good(robot: SimRobot) -> None:
+def test_abort_stops_for_good() -> None:
+    robot = _robot(time_scale=1.0)  # real time: the take-off lasts 2 s, a window the test thread does not miss
+    try:
+        _abort_in_the_takeoff(robot)
+    finally:
+        robot.close()
+
+
+def _abort_in_the_takeoff(robot: SimRobot) -> None:
     manager = MissionManager(robot)
     manager.start(_mission())
-    while manager.progress().kind is not TAKEOFF:
-        time.sleep(0.005)
+    _until(lambda: manager.progress().kind is TAKEOFF, "the take-off")
     manager.abort()
-    assert manager.wait(5.0) is MissionStatus.ABORTED
+    assert manager.wait(30.0) is MissionStatus.ABORTED
     time.sleep(0.2)
     st = robot.latest_state()
     assert st.mode in (Mode.HOLDING, Mode.IDLE) and st.speed == pytest.approx(0.0, abs=1e-9)
@@ -148,7 +170,7 @@ def test_a_blocked_path_pauses_the_mission_with_the_reason(robot: SimRobot) -> N
     assert "walking stopped" in p.message and "cardboard_box" in p.message and "paused" in p.message
     assert p.segment == 0 and p.mission_id == through.id and 0.2 < p.fraction < 0.8
     manager.abort()
-    assert manager.wait(5.0) is MissionStatus.ABORTED
+    assert manager.wait(30.0) is MissionStatus.ABORTED
 
 
 def test_link_loss_runs_the_failsafe_and_the_mission_survives() -> None:
@@ -164,12 +186,11 @@ def test_link_loss_runs_the_failsafe_and_the_mission_survives() -> None:
     try:
         manager = MissionManager(robot, failsafe_after=0.3, failsafe_hold=0.3)
         manager.start(hop)
-        while manager.progress().kind is not FLY:
-            time.sleep(0.005)
+        _until(lambda: manager.progress().kind is FLY, "the flight")
         time.sleep(0.2)
         robot.drop_link(2.0)
-        assert manager.wait(5.0, until=[MissionStatus.FAILSAFE]) is MissionStatus.FAILSAFE
-        deadline = time.monotonic() + 5.0
+        assert manager.wait(30.0, until=[MissionStatus.FAILSAFE]) is MissionStatus.FAILSAFE
+        deadline = time.monotonic() + 60.0
         while (robot.latest_state().link_ok is False or not robot.latest_state().landed) and time.monotonic() < deadline:
             time.sleep(0.02)
         msgs = [e.message for e in manager.events]
@@ -180,7 +201,7 @@ def test_link_loss_runs_the_failsafe_and_the_mission_survives() -> None:
         p = manager.progress()
         assert p.status is MissionStatus.FAILSAFE and p.segment == 1 and p.mission_id == hop.id
         manager.resume()  # takes off again where it landed and finishes the flight
-        assert manager.wait(30.0) is MissionStatus.DONE, [e.message for e in manager.events]
+        assert manager.wait(60.0) is MissionStatus.DONE, [e.message for e in manager.events]
         assert robot.latest_state().position == pytest.approx((2.5, 2.9, 0.0))
         assert any("recovery" in m for m in (e.message for e in manager.events))
     finally:
@@ -191,7 +212,7 @@ class _SlowHold(SimRobot):
     """A robot whose hold command takes long to confirm (a MAVLink BRAKE waiting out its ACK retries)."""
 
     def hold(self) -> None:
-        time.sleep(0.8)
+        time.sleep(1.5)
         super().hold()
 
 
@@ -205,10 +226,11 @@ def test_a_link_back_during_a_slow_hold_pauses_instead_of_landing() -> None:
     try:
         manager = MissionManager(robot, failsafe_after=0.3, failsafe_hold=0.3)
         manager.start(hop)
-        while manager.progress().kind is not FLY:
-            time.sleep(0.005)
-        robot.drop_link(0.5)  # back before the hold returns, after failsafe_hold has run out
-        assert manager.wait(5.0, until=[MissionStatus.PAUSED]) is MissionStatus.PAUSED, \
+        _until(lambda: manager.progress().kind is FLY, "the flight")
+        # back after 1.2 s: before the hold returns (failsafe at >= 0.3 s + 1.5 s), after failsafe_hold (0.3 s)
+        # has run out, and later than the failsafe even when a loaded machine decides it 0.9 s late
+        robot.drop_link(1.2)
+        assert manager.wait(30.0, until=[MissionStatus.PAUSED]) is MissionStatus.PAUSED, \
             [e.message for e in manager.events]
         msgs = [e.message for e in manager.events]
         assert any(m.startswith("FAILSAFE: robot not heard for") for m in msgs)
