@@ -50,6 +50,7 @@ ARMABLE = {"GUIDED", "LOITER", "STABILIZE", "ALT_HOLD", "POSHOLD"}
 STREAMS = ("LOCAL_POSITION_NED", "ATTITUDE", "SYS_STATUS", "EXTENDED_SYS_STATE", "EKF_STATUS_REPORT")
 DATA_STREAM_GROUPS = {2: ("SYS_STATUS", "EXTENDED_SYS_STATE"), 6: ("LOCAL_POSITION_NED",), 10: ("ATTITUDE",),
                       12: ("EKF_STATUS_REPORT",)}
+PHYSICS_STEP = 0.005  # [s] longest motion integration step (the loop sleeps 4 ms when idle)
 EKF_GOOD = 1 | 2 | 4 | 8 | 16 | 32  # attitude, velocities, horizontal rel/abs, vertical position
 ORIGIN = (-35.3632621, 149.1652374, 584.0)  # ArduPilot SITL's default home (lat, lon deg, alt m)
 
@@ -258,7 +259,7 @@ class ArduCopterEmulator:
                     self.record.late += len(queued)
                     for m in queued:
                         self._handle(m)
-                self._physics(now - last)
+                self._step(now - last)
             last = now
             if now >= next_hb:
                 next_hb = now + 1.0 / self.heartbeat_rate
@@ -468,6 +469,13 @@ class ArduCopterEmulator:
         self.vel = [self.vel[i] + dv[i] * k for i in range(3)]
         if n <= 1e-3 and m < 1e-3:
             self.pos = list(self.target)
+
+    def _step(self, dt: float) -> None:
+        """Advance the motion by ``dt`` [s] in steps of at most ``PHYSICS_STEP``: a loop woken late on
+        a loaded machine integrates as finely as an idle one (no overshoot from one long step)."""
+        n = max(1, math.ceil(dt / PHYSICS_STEP))
+        for _ in range(min(n, 2000)):
+            self._physics(dt / n)
 
     def _physics(self, dt: float) -> None:
         if dt <= 0 or self.frozen or time.monotonic() < self._silent_until:
