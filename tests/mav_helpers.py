@@ -30,9 +30,9 @@ def vehicle(config: MavlinkConfig = CFG, faults: dict[str, Any] | None = None, w
         setattr(sim, k, v)
     sim.start()
     try:
-        link.connect(timeout=5.0)
+        link.connect(timeout=20.0)
         if wait_ok:
-            assert eventually(lambda: link.latest_state() is not None and link.latest_state().health == "ok", 5.0), \
+            assert eventually(lambda: link.latest_state() is not None and link.latest_state().health == "ok", 30.0), \
                 link.latest_state()
         yield link, sim
     finally:
@@ -53,8 +53,10 @@ def mission_manager(link: MavlinkLink, **kw: Any) -> MissionManager:
     return m
 
 
-def eventually(check: Callable[[], Any], timeout: float = 5.0, poll: float = 0.02) -> bool:
-    """Poll ``check`` until truthy or ``timeout`` [s]; returns the last result's truth."""
+def eventually(check: Callable[[], Any], timeout: float = 30.0, poll: float = 0.02) -> bool:
+    """Poll ``check`` until truthy or ``timeout`` [s]; returns the last result's truth.
+
+    The time-out is generous (a loaded 2-core CI machine): it costs nothing when the state arrives."""
     deadline = time.monotonic() + timeout
     while time.monotonic() < deadline:
         if check():

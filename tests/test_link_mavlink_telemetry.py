@@ -40,9 +40,12 @@ def test_nan_position_is_dropped_the_pose_goes_stale_and_the_walk_stops() -> Non
     with vehicle(config(ground=replace_ground(0.5)), walk_speed=0.5) as (link, emu):
         manager = mission_manager(link, failsafe_after=1.0, failsafe_hold=0.4)
         manager.start(_walk_mission())
-        assert eventually(lambda: link.latest_state().position[1] > ORIGIN[1] + 0.3, 10.0)
+        assert eventually(lambda: link.latest_state().position[1] > ORIGIN[1] + 0.3)
         emu.corrupt = {"x": NAN, "y": NAN}
-        assert manager.wait(10.0, until=[MissionStatus.FAILSAFE]) is MissionStatus.FAILSAFE, events(manager)
+        assert manager.wait(30.0, until=[MissionStatus.FAILSAFE]) is MissionStatus.FAILSAFE, events(manager)
+        # the failsafe reads the live age; the stored state sample says 'stale' at its next sample
+        assert eventually(lambda: link.latest_state().health.startswith("stale: no valid position for")), \
+            link.latest_state().health
         st = link.latest_state()
         assert not st.link_ok and not st.position_valid and _finite(st.position)
         assert st.health.startswith("stale: no valid position for") and "LOCAL_POSITION_NED.x: not finite" in st.health
@@ -50,13 +53,13 @@ def test_nan_position_is_dropped_the_pose_goes_stale_and_the_walk_stops() -> Non
         assert eventually(lambda: any("robot is on the ground; the mission is kept" in m for m in events(manager)))
         assert any(m.startswith("FAILSAFE: robot not heard for") and "stale" in m for m in events(manager))
         assert all(_finite(t[:3]) for t in emu.record.targets)  # nothing computed from the NaN was sent
-        assert eventually(lambda: math.hypot(*emu.vel[:2]) < 1e-6, 3.0)  # stopped by the hold (zero velocity)
+        assert eventually(lambda: math.hypot(*emu.vel[:2]) < 1e-6)  # stopped by the hold (zero velocity)
         stopped_at = list(emu.pos)
         emu.corrupt = {}
         assert eventually(lambda: link.latest_state().health == "ok")
         assert link.latest_state().position[1] == pytest.approx(ORIGIN[1] + stopped_at[0], abs=0.02)
         manager.resume()
-        assert manager.wait(20.0) is MissionStatus.DONE, events(manager)
+        assert manager.wait(60.0) is MissionStatus.DONE, events(manager)
         assert eventually(lambda: link.latest_state().position == pytest.approx((2.5, 4.0, 0.0), abs=0.05))
         assert any("link restored after the failsafe: the robot is idle, autopilot mode GUIDED, on the ground at"
                    in m for m in events(manager)), events(manager)
@@ -89,7 +92,7 @@ def test_other_non_finite_or_implausible_fields_are_dropped_and_named(fault, fie
         else:
             assert eventually(lambda: not link.latest_state().position_valid and not link.latest_state().link_ok)
         emu.corrupt = {}
-        assert eventually(lambda: link.latest_state().health == "ok", 4.0)
+        assert eventually(lambda: link.latest_state().health == "ok")
 
 
 def test_before_the_first_position_the_pose_is_unknown_not_the_origin() -> None:
@@ -112,27 +115,28 @@ def test_telemetry_stopping_without_a_heartbeat_gap_is_link_loss() -> None:
     """Fault 2, neighbour: the streams stop, heartbeats go on. Health 'stale', failsafe: hold, then
     land where the robot is (no flight anywhere)."""
     with vehicle() as (link, emu):
-        assert link.run_segment(MissionSegment(TAKEOFF, ((2.5, 0.7, 0.0), (2.5, 0.7, 1.5)))).wait(10) is RunStatus.DONE
+        assert link.run_segment(MissionSegment(TAKEOFF, ((2.5, 0.7, 0.0), (2.5, 0.7, 1.5)))).wait(30) is RunStatus.DONE
         manager = mission_manager(link, failsafe_after=1.0, failsafe_hold=0.5)
         manager.start(Mission((MissionSegment(FLY, ((2.5, 0.7, 1.5), (2.5, 9.0, 1.5))),),
                               bounds_max=(10.0, 10.0, 3.0)))
-        assert eventually(lambda: link.latest_state().position[1] > 2.0, 10.0)
+        assert eventually(lambda: link.latest_state().position[1] > 2.0)
         emu.telemetry_enabled = False
-        assert eventually(lambda: link.latest_state().health.startswith("stale"), 3.0)
-        assert link.latest_state().link_age < 1.0  # heartbeats still arrive
-        assert manager.wait(10.0, until=[MissionStatus.FAILSAFE]) is MissionStatus.FAILSAFE
-        assert eventually(lambda: emu.mode == "LAND", 10.0), events(manager)
+        # stale while the heartbeats still arrive (5 Hz: a recent one in some sample)
+        assert eventually(lambda: link.latest_state().health.startswith("stale") and link.latest_state().link_age < 0.5), \
+            link.latest_state()
+        assert manager.wait(30.0, until=[MissionStatus.FAILSAFE]) is MissionStatus.FAILSAFE
+        assert eventually(lambda: emu.mode == "LAND"), events(manager)
         i = emu.record.modes.index("BRAKE", 1)
         assert emu.record.modes[i:] == ["BRAKE", "LAND"]  # hold, then land: never back to GUIDED
-        assert eventually(lambda: emu.landed_state == mav.MAV_LANDED_STATE_ON_GROUND, 10.0)
+        assert eventually(lambda: emu.landed_state == mav.MAV_LANDED_STATE_ON_GROUND)
         emu.telemetry_enabled = True
         assert eventually(lambda: any("link restored after the failsafe" in m and "on the ground" in m
-                                      for m in events(manager)), 10.0), events(manager)
+                                      for m in events(manager))), events(manager)
         assert manager.progress().status is MissionStatus.FAILSAFE
 
 
 @pytest.mark.parametrize("silence", [0.4, 1.6])  # shorter than the heartbeat time-out, and longer
-def test_a_reboot_is_detected_streams_come_back_and_the_origin_change_is_warned(silence) -> None:
+def test_a_reboot_is_detected_streams_come_back_and_the_origin_change_is_warned(silence, caplog) -> None:
     """Fault 2: the vehicle reboots mid-walk, forgets the stream rates and sets a new EKF origin
     where it stands. The link asks for the streams again, re-reads the origin and warns; the
     mission pauses with the reason."""
@@ -140,25 +144,32 @@ def test_a_reboot_is_detected_streams_come_back_and_the_origin_change_is_warned(
                  faults={"streams_need_request": True}) as (link, emu):
         manager = mission_manager(link, failsafe_after=3.0, failsafe_hold=0.5)
         manager.start(_walk_mission())
-        assert eventually(lambda: link.latest_state().position[1] > ORIGIN[1] + 0.8, 10.0)
+        assert eventually(lambda: link.latest_state().position[1] > ORIGIN[1] + 0.8)
         requests = len(emu.record.intervals)
         with emu.lock:  # the new origin is where it stands at the reboot
             moved = math.hypot(emu.pos[0], emu.pos[1])
             emu.reboot()
-        assert manager.wait(10.0, until=[MissionStatus.PAUSED]) is MissionStatus.PAUSED, events(manager)
-        assert eventually(lambda: link.latest_state().health == "ok", 5.0)  # streams requested again
-        assert len(emu.record.intervals) > requests
-        st = link.latest_state()
-        assert st.link_epoch >= 1
-        assert eventually(lambda: any("EKF origin moved" in w for w in link.latest_state().warnings), 5.0)
+        assert manager.wait(30.0, until=[MissionStatus.PAUSED]) is MissionStatus.PAUSED, events(manager)
+        assert eventually(lambda: len(emu.record.intervals) > requests), emu.record.intervals  # streams asked again
+        assert eventually(lambda: link.latest_state().health == "ok" and link.latest_state().link_epoch >= 1), \
+            link.latest_state()
+        assert eventually(lambda: any("EKF origin moved" in w for w in link.latest_state().warnings))
         warning = next(w for w in link.latest_state().warnings if "EKF origin moved" in w)
         assert float(warning.split("moved ")[1].split(" m")[0]) == pytest.approx(moved, abs=0.051), warning
         message = manager.progress().message
         assert "walk: the robot reconnected or rebooted" in message and "robot held, mission paused" in message
-        why = "time_boot_ms went back" if silence < 1.0 else "heartbeat back after"
-        assert f"vehicle rebooted ({why}" in message or f"vehicle {why}" in message, message
+        # a long silence is seen twice (the heartbeat gap, then time_boot_ms going back; a loaded machine can
+        # stretch a short one past the heartbeat time-out too): the pause names whichever the manager heard
+        # of last, which depends on scheduling; the link logged each
+        whys = ("time_boot_ms went back", "heartbeat back after")
+        assert any(f"vehicle rebooted ({w}" in message or f"vehicle {w}" in message for w in whys), message
+        logged = [r.getMessage() for r in caplog.records]
+        assert any("time_boot_ms went back" in m for m in logged), logged
+        if silence >= 1.0:
+            assert any("heartbeat back after" in m for m in logged), logged
         # the twin now shows the new-origin pose: at the NED origin again, and the operator was told
-        assert link.latest_state().position[:2] == pytest.approx(ORIGIN[:2], abs=0.05)
+        assert eventually(lambda: link.latest_state().position[:2] == pytest.approx(ORIGIN[:2], abs=0.05)), \
+            link.latest_state().position
 
 
 def test_a_tcp_reconnect_is_detected_and_the_streams_are_asked_for_again() -> None:
@@ -172,15 +183,15 @@ def test_a_tcp_reconnect_is_detected_and_the_streams_are_asked_for_again() -> No
     emu.start()
     link = MavlinkLink(f"tcp:127.0.0.1:{port}", config())
     try:
-        link.connect(timeout=5.0)
+        link.connect(timeout=20.0)
         assert eventually(lambda: link.latest_state() is not None and link.latest_state().health == "ok")
         asked = len(emu.record.intervals)
         emu.drop_client()
         emu.streaming = set()  # a restarted vehicle forgot the rates
-        assert eventually(lambda: link.latest_state().link_epoch >= 1, 10.0)
+        assert eventually(lambda: link.latest_state().link_epoch >= 1)
         assert any("transport reconnected" in w for w in link.latest_state().warnings)
-        assert eventually(lambda: len(emu.record.intervals) > asked, 10.0), emu.record.intervals  # asked again
-        assert eventually(lambda: link.latest_state().health == "ok", 10.0)
+        assert eventually(lambda: len(emu.record.intervals) > asked), emu.record.intervals  # asked again
+        assert eventually(lambda: link.latest_state().health == "ok")
     finally:
         link.close()
         emu.stop()
@@ -199,8 +210,8 @@ def test_refused_set_message_interval_falls_back_to_request_data_stream_and_retr
         assert any("refused MAV_CMD_SET_MESSAGE_INTERVAL (MAV_RESULT_UNSUPPORTED)" in w for w in st.warnings)
         asked = len(emu.record.data_streams)
         emu.streaming = set()  # the vehicle stops streaming (forgot the rates): asked again
-        assert eventually(lambda: link.latest_state().health.startswith("stale"), 3.0)
-        assert eventually(lambda: link.latest_state().health == "ok", 5.0)
+        assert eventually(lambda: link.latest_state().health.startswith("stale"))
+        assert eventually(lambda: link.latest_state().health == "ok")
         assert len(emu.record.data_streams) > asked
 
 
@@ -236,7 +247,7 @@ def test_the_autopilot_is_chosen_not_a_component_that_heartbeats_first(component
         assert link.latest_state().yaw == pytest.approx(math.pi / 2 - 0.2, abs=1e-4)
         assert link.latest_state().autopilot_mode == "STABILIZE"
         run = link.run_segment(MissionSegment(TAKEOFF, ((2.5, 0.7, 0.0), (2.5, 0.7, 1.0))))
-        assert run.wait(10.0) is RunStatus.DONE, run.error
+        assert run.wait(30.0) is RunStatus.DONE, run.error
         assert emu.record.to_others == []  # every command went to the autopilot
 
 
@@ -270,7 +281,7 @@ def test_takeoff_waits_for_the_position_estimate_instead_of_failing() -> None:
         assert manager.progress().status is MissionStatus.RUNNING
         assert not any(c == mav.MAV_CMD_COMPONENT_ARM_DISARM for c, _ in emu.record.received)  # no doomed arming
         emu.ekf_ready = True
-        assert manager.wait(20.0) is MissionStatus.DONE, events(manager)
+        assert manager.wait(60.0) is MissionStatus.DONE, events(manager)
         assert emu.record.takeoff_altitudes == [pytest.approx(1.5)]
 
 
@@ -279,7 +290,7 @@ def test_a_vehicle_that_never_gets_ready_pauses_the_mission_with_its_reasons() -
         assert eventually(lambda: link.latest_state() is not None and link.latest_state().readiness)
         manager = mission_manager(link, failsafe_after=1.5, failsafe_hold=0.5, ready_timeout=1.0)
         manager.start(Mission((MissionSegment(TAKEOFF, ((2.5, 0.7, 0.0), (2.5, 0.7, 1.5))),)))
-        assert manager.wait(10.0) is MissionStatus.PAUSED
+        assert manager.wait(30.0) is MissionStatus.PAUSED
         message = manager.progress().message
         assert "no valid robot position after 1 s" in message and "PreArm: Need Position Estimate" in message, message
 
