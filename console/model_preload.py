@@ -113,7 +113,7 @@ class ModelPreload:
             quiet = self._waiters > 0  # a waiting capture shows the progress in its own status
             self._cond.notify_all()
         if not quiet:
-            self._session.set_job(JobStatus(PRELOAD_NAME, True, f, str(message)))
+            self._session.set_job(JobStatus(PRELOAD_NAME, True, f, str(message)), background=True)
 
     def _finish(self, state: str, error: str | None, seconds: float) -> None:
         with self._cond:
@@ -124,10 +124,10 @@ class ModelPreload:
         if state == "ready":
             log.info("perception models ready in %.1f s (%s)", seconds, label)
             if not quiet:
-                self._session.set_job(JobStatus(PRELOAD_NAME, False, 1.0, f"models ready in {seconds:.1f} s"))
+                self._session.set_job(JobStatus(PRELOAD_NAME, False, 1.0, f"models ready in {seconds:.1f} s"), background=True)
             return
         if not quiet:
-            self._session.set_job(JobStatus(PRELOAD_NAME, False, 0.0, "failed", error))
+            self._session.set_job(JobStatus(PRELOAD_NAME, False, 0.0, "failed", error), background=True)
         self._session.notify("Models not loaded", f"{error} Capture & map will try again.", "error")
 
     def _run(self) -> None:

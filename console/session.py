@@ -432,10 +432,18 @@ class Session(Persistence, Undo, OperatorRules):
             events.append((ROUTE, None))
         self._emit(events)
 
-    def set_job(self, status: JobStatus) -> None:
+    def set_job(self, status: JobStatus, *, background: bool = False) -> bool:
+        """Show a job's progress to every tab; ``True`` if shown.
+
+        ``background=True`` (a job nobody asked for, e.g. the start-up model loading) never replaces
+        another job's status: once a capture has reported, the bar is the capture's.
+        """
         with self._lock:
+            if background and self._job.name not in ("", status.name):
+                return False
             self._job = status
         self._emit([(JOB, status)])
+        return True
 
     def set_run(self, status: RunStatus) -> None:
         with self._lock:

@@ -156,3 +156,32 @@ def test_preloaded_models_are_the_ones_the_capture_uses(tmp_path: Path, robot: S
         assert any(step in m for m in preload_steps), (step, preload_steps)
     fr = [j.fraction for j in jobs if j.name == PRELOAD_NAME and j.running]
     assert fr == sorted(fr)
+
+
+class _GatedPerceiver:
+    """A perceiver whose loading ends only when the test says so."""
+
+    label = "gated"
+
+    def __init__(self) -> None:
+        import threading
+
+        self.release = threading.Event()
+
+    def preload(self, progress: Callable[[float, str], None]) -> None:
+        progress(0.5, "loading the gated model")
+        assert self.release.wait(120), "the test never released the loading"
+
+
+def test_a_loading_that_ends_during_a_capture_does_not_take_over_its_progress_bar(tmp_path: Path) -> None:
+    """The start-up loading's status is a background job: once a capture has reported, the bar is the
+    capture's (a late 'models ready' no longer replaced a running capture's progress)."""
+    session = Session(tmp_path / "s")
+    perceiver = _GatedPerceiver()
+    preload = ModelPreload(session, perceiver)
+    preload.start()
+    assert _wait_until(lambda: session.job.name == PRELOAD_NAME and session.job.running)
+    session.set_job(JobStatus(JOB_NAME, True, 0.3, "asking the robot for a photo"))  # a capture starts
+    perceiver.release.set()
+    assert preload.join(60) and preload.state == "ready"
+    assert session.job.name == JOB_NAME and session.job.running and session.job.fraction == 0.3, session.job
