@@ -285,7 +285,8 @@ def test_abort_in_the_air_then_land_here_puts_the_robot_down_and_the_route_at_it
     assert s.route_snapshot().goals[-1][:2] == pytest.approx((2.625, 5.625))
     assert s.mission is not None and _near(s.mission.segments[0].start, floor)  # rebuilt from the robot
     assert s.operator_state().execute_blocker is None
-    assert not any(c.shown for c in s.operator_state().commands.values())  # disarmed on the floor
+    # disarmed on the floor (the session hears of the disarming at its next robot sample)
+    wait_for(lambda: not any(c.shown for c in s.operator_state().commands.values()), what="no command once disarmed")
     stack.runner.execute(s.mission)
     wait_for(lambda: s.run.state == "done" and s.route_snapshot().registered == (), what="mission done")
     assert math.dist(stack.pos[:2], (2.625, 5.625)) < 0.3
@@ -296,6 +297,7 @@ def test_return_flies_back_to_the_launch_spot_and_lands(stack: Stack) -> None:
     stack.plan((2.5, 5.7, 0.0))
     stack.runner.execute(s.build_mission())
     wait_for(lambda: stack.robot.latest_state().mode.value == "flying", what="flying")
+    wait_for(lambda: s.robot is not None and s.robot.mode == "flying", what="the session sees it flying")
     launch = s.operator_state().launch
     assert launch is not None and launch[1] > 1.5  # where it took off, not where the mission began
     stack.runner.abort()

@@ -20,6 +20,7 @@ from mcap.reader import make_reader
 from mcap_protobuf.decoder import DecoderFactory
 
 from console.app import ConsoleApp, ConsoleConfig, wait_until
+from console.mapping_job import JOB_NAME
 from console.recording import Recorder
 from console.session import NOTICE, ROBOT, RobotSnapshot, Session
 from pipeline.geometry import Pose
@@ -56,9 +57,9 @@ def run_short_mission(tmp_path: Path) -> tuple[Path, list[RobotSnapshot], Any]:
         session = app.session
         assert session is not None and app.mapping is not None and app.runner is not None
         session.subscribe(lambda t, p: snaps.append(p) if t == ROBOT else None)
-        assert wait_until(lambda: session.robot is not None, 30), "the simulated robot never reported"
+        assert wait_until(lambda: session.robot is not None, 60), "the simulated robot never reported"
         assert app.mapping.start()
-        assert wait_until(lambda: not session.job.running and session.job.fraction == 1.0, 90), session.job
+        assert wait_until(lambda: session.job.name == JOB_NAME and not session.job.running and session.job.fraction == 1.0, 300), session.job
         assert session.capture is not None and len(session.scene.objects) >= 5
         for goal in GOALS:
             if session.add_goal(goal).ok:
@@ -68,7 +69,7 @@ def run_short_mission(tmp_path: Path) -> tuple[Path, list[RobotSnapshot], Any]:
         session.register()
         mission = session.build_mission()
         app.runner.execute(mission)
-        assert wait_until(lambda: session.run.state == "done", 90), session.run
+        assert wait_until(lambda: session.run.state == "done", 180), session.run
         session.notify("Test", "mission flown", "success")
     finally:
         app.stop()
@@ -185,7 +186,7 @@ def test_an_unwritable_folder_gives_one_notice_and_the_session_goes_on(tmp_path:
     session, notices = _session_with_notices(tmp_path)
     rec = Recorder(session, folder=blocker / "recordings").start()
     _churn(session)
-    assert wait_until(lambda: rec.failed is not None, 20)
+    assert wait_until(lambda: rec.failed is not None, 60)
     _churn(session)
     rec.close()
     stopped = [n for n in notices if n.title == "Recording stopped"]
@@ -202,7 +203,7 @@ def test_an_immutable_folder_gives_one_notice(tmp_path: Path) -> None:
         session, notices = _session_with_notices(tmp_path)
         rec = Recorder(session, folder=folder).start()
         _churn(session)
-        assert wait_until(lambda: rec.failed is not None, 20)
+        assert wait_until(lambda: rec.failed is not None, 60)
         rec.close()
         stopped = [n for n in notices if n.title == "Recording stopped"]
         assert len(stopped) == 1 and "locked" in stopped[0].body
