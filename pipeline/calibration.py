@@ -169,6 +169,8 @@ def calibrate(photos: Sequence[tuple[str, np.ndarray]], board: Board, *, min_vie
     """
     if not photos:
         raise CalibrationError("no photos given")
+    if int(min_views) < 1:
+        raise CalibrationError(f"min_views: must be at least 1, got {min_views}")
     h0, w0 = photos[0][1].shape[:2]
     obj_pts: list[np.ndarray] = []
     img_pts: list[np.ndarray] = []
@@ -195,8 +197,8 @@ def calibrate(photos: Sequence[tuple[str, np.ndarray]], board: Board, *, min_vie
             img_pts.append(found[1])
         used.append(name)
     if len(used) < min_views:
-        raise CalibrationError(f"the board was found in {len(used)} of {len(photos)} photo(s); at least {min_views} "
-                               f"are needed (different angles and distances, the board filling much of the frame)")
+        raise CalibrationError(f"the board was found in {len(used)} of {len(photos)} photo{'' if len(photos) == 1 else 's'}; "
+                               f"at least {min_views} {'is' if min_views == 1 else 'are'} needed (different angles and distances, the board filling much of the frame)")
     rms, K, dist, _, _, std_intr, _, per_view = cv2.calibrateCameraExtended(
         obj_pts, img_pts, (w0, h0), None, None)
     fx, fy = float(K[0, 0]), float(K[1, 1])

@@ -211,6 +211,8 @@ def cmd_bench(args: argparse.Namespace) -> int:
         raise _UserError(f"--out {args.out} is a directory; give a file name such as {Path(args.out) / 'bench_report.json'}")
     if args.limit is not None and args.limit < 1:
         raise _UserError(f"--limit: must be at least 1, got {args.limit}")
+    if not 0.0 < args.iou <= 1.0:  # also refuses nan
+        raise _UserError(f"--iou: must be within 0..1 (a 2D overlap ratio, above 0), got {args.iou}")
     catalog = _catalog(args)
     models = None
     if not (args.gt_boxes and args.no_models):
@@ -280,6 +282,8 @@ def cmd_calibrate(args: argparse.Namespace) -> int:
     from pipeline.camera_file import write_camera_toml
     from pipeline.image_io import read_image
 
+    if args.min_views < 1:
+        raise _UserError(f"--min-views: must be at least 1, got {args.min_views}")
     out = Path(args.out)
     if out.is_dir():
         raise _UserError(f"--out {out} is a directory; give a file name such as {out / 'camera.toml'}")

@@ -48,7 +48,7 @@ def test_charuco_recovers_the_camera_within_1_percent() -> None:
 
 def test_too_few_views_are_refused(chess_views) -> None:
     blank = ("blank.png", np.full((480, 640, 3), 128, np.uint8))
-    with pytest.raises(CalibrationError, match=r"found in 3 of 4 photo\(s\); at least 5 are needed"):
+    with pytest.raises(CalibrationError, match=r"found in 3 of 4 photos; at least 5 are needed"):
         calibrate([*chess_views[:3], blank], CHESS)
 
 

@@ -1,0 +1,54 @@
+"""Found by trying the CLI as a newcomer: bad numbers are refused naming the option, exit status 2, no traceback."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import cv2
+import numpy as np
+import pytest
+
+from console.cli import main
+
+
+@pytest.fixture
+def photos(tmp_path: Path) -> Path:
+    folder = tmp_path / "calib"
+    folder.mkdir()
+    for i in range(2):  # no board on them: nothing can be calibrated
+        cv2.imwrite(str(folder / f"p{i}.png"), np.full((120, 160, 3), 90 + i, np.uint8))
+    return folder
+
+
+@pytest.mark.parametrize("value", ["-3", "0"])
+def test_calibrate_refuses_a_min_views_below_one(photos: Path, tmp_path: Path, value: str,
+                                                 capsys: pytest.CaptureFixture[str]) -> None:
+    out = tmp_path / "camera.toml"
+    code = main(["calibrate", str(photos), "--board", "9x6", "--square", "0.02", "--min-views", value, "--out", str(out)])
+    err = capsys.readouterr().err
+    assert code == 2 and "--min-views" in err and value in err and "Traceback" not in err
+    assert not out.exists()
+
+
+def test_calibrate_api_refuses_a_min_views_below_one() -> None:
+    from pipeline.calibration import Board, CalibrationError, calibrate
+
+    with pytest.raises(CalibrationError, match="min_views"):
+        calibrate([("a.png", np.zeros((120, 160, 3), np.uint8))], Board("chessboard", 9, 6, 0.02), min_views=0)
+
+
+def test_calibrate_counts_photos_with_the_right_plural(photos: Path, tmp_path: Path,
+                                                       capsys: pytest.CaptureFixture[str]) -> None:
+    code = main(["calibrate", str(photos / "p0.png"), "--board", "9x6", "--square", "0.02",
+                 "--out", str(tmp_path / "camera.toml")])
+    err = capsys.readouterr().err
+    assert code == 2 and "found in 0 of 1 photo;" in err and "(s)" not in err
+
+
+@pytest.mark.parametrize("value", ["2", "nan", "0", "-0.5", "inf"])
+def test_bench_refuses_an_iou_outside_0_1(tmp_path: Path, value: str, capsys: pytest.CaptureFixture[str]) -> None:
+    out = tmp_path / "report.json"
+    code = main(["bench", str(tmp_path), "--gt-boxes", "--no-models", "--iou", value, "--out", str(out)])
+    err = capsys.readouterr().err
+    assert code == 2 and "--iou" in err and "Traceback" not in err
+    assert not out.exists()
