@@ -399,12 +399,15 @@ class Session(Persistence, Undo, OperatorRules):
         self._mission = self._mission_after_edit_locked()
         kept = len(self._route.registered)
         if kept < len(goals):
-            segs = f"segment {kept + 1}" if kept + 1 == len(goals) else f"segments {kept + 1}-{len(goals)}"
+            one = kept + 1 == len(goals)
+            segs = f"segment {kept + 1}" if one else f"segments {kept + 1}-{len(goals)}"
             to = ", ".join(fmt_point(g) for g in goals[kept:])
             self._outbox.append(Notice(
                 "Route segments removed",
-                f"{label}: registered {segs} (to {to}) now cross obstacles and were removed"
-                + ("; the mission was retired" if had_mission and self._mission is None else "") + ". Undo brings them back.", "warning"))
+                f"{label}: registered {segs} (to {to}) now "
+                + ("crosses obstacles and was removed" if one else "cross obstacles and were removed")
+                + ("; the mission was retired" if had_mission and self._mission is None else "")
+                + (". Undo brings it back." if one else ". Undo brings them back."), "warning"))
         if self._selected is not None and self._selected not in {o.id for o in scene.objects}:
             self._selected = None
         self._save_locked()

@@ -203,7 +203,8 @@ class Route:
             if not np.all(np.isfinite(self._cost[seg[:, 0], seg[:, 1], seg[:, 2]])):
                 dropped = len(self.registered) - n
                 del self.registered[n:]
-                notes.append(f"{dropped} registered segment(s) now cross obstacles and were removed")
+                notes.append("1 registered segment now crosses obstacles and was removed" if dropped == 1 else
+                             f"{dropped} registered segments now cross obstacles and were removed")
                 break
         if self.candidate_goal is not None:
             goal = self.candidate_goal

@@ -154,7 +154,7 @@ def test_spawn_drops_registered_segments_that_cross_new_obstacles(session: Sessi
     assert session.add_goal((2.5, 6.0, 0.0)).ok
     session.register()
     rep = session.spawn(_line_of_boxes())
-    assert any("cross obstacles" in n for n in rep.notes)
+    assert any("crosses obstacles and was removed" in n for n in rep.notes)
     assert session.route_snapshot().registered == ()
 
 

@@ -1,0 +1,55 @@
+"""Found by trying the console as a newcomer: counts read with the right plural, no "segment(s)"."""
+
+from __future__ import annotations
+
+from pipeline.scene import SceneObject
+from planner.grid import Workspace, build_grid
+from planner.route import Route
+
+
+def _blocked_route(stops: list[tuple[float, float, float]]) -> list[str]:
+    route = Route(build_grid([], Workspace(resolution=0.25), margin=0.3), (0.5, 0.5, 0.0))
+    for stop in stops:
+        assert route.propose(stop).ok
+        route.register()
+    wall = SceneObject("wall", "cardboard_box", (2.5, 1.5, 1.5), (0.5, 3.0, 5.0))  # across every stop's path
+    return route.set_grid(build_grid([wall], Workspace(resolution=0.25), margin=0.3))
+
+
+def test_one_removed_segment_is_counted_in_the_singular() -> None:
+    notes = _blocked_route([(4.5, 1.5, 0.0)])
+    assert "1 registered segment now crosses obstacles and was removed" in notes
+    assert not any("(s)" in n for n in notes)
+
+
+def test_two_removed_segments_are_counted_in_the_plural() -> None:
+    notes = _blocked_route([(4.5, 1.5, 0.0), (4.5, 3.0, 0.0)])
+    assert "2 registered segments now cross obstacles and were removed" in notes
+
+
+def _removal_notices(tmp_path, stops: list[tuple[float, float, float]]) -> list[str]:
+    from console.session import Session
+    from console.topics import NOTICE
+    from pipeline.scene import Scene
+
+    session = Session(tmp_path / "session", start=(0.5, 0.5, 0.0))
+    for stop in stops:
+        assert session.add_goal(stop).ok
+        session.register()
+    seen: list[str] = []
+    session.subscribe(lambda topic, payload: seen.append(payload.body) if topic == NOTICE else None)
+    session.spawn(Scene((SceneObject("wall", "cardboard_box", (2.5, 1.5, 1.5), (0.5, 3.0, 2.9)),)))
+    return [b for b in seen if "registered segment" in b]
+
+
+def test_the_session_notice_for_one_removed_segment_agrees_in_number(tmp_path) -> None:
+    (body,) = _removal_notices(tmp_path, [(4.5, 1.5, 0.0)])
+    assert "registered segment 1 (to (4.62, 1.62, 0.00)) now crosses obstacles and was removed" in body, body
+    assert body.endswith("Undo brings it back."), body
+
+
+def test_the_session_notice_for_two_removed_segments_agrees_in_number(tmp_path) -> None:
+    (body,) = _removal_notices(tmp_path, [(4.5, 1.5, 0.0), (4.5, 3.0, 0.0)])
+    assert ("registered segments 1-2 (to (4.62, 1.62, 0.00), (4.62, 3.12, 0.00)) now cross obstacles and were removed"
+            in body), body
+    assert body.endswith("Undo brings them back."), body
