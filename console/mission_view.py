@@ -17,7 +17,7 @@ from planner.mission import Mission, SegmentKind
 
 from .client_notice import tell
 from .paths_view import KIND_RGB
-from .wording import plural
+from .wording import kind_text, plural
 from .session import MISSION, ROBOT, ROUTE, RUN, RunStatus, Session, SessionError
 
 
@@ -38,6 +38,11 @@ def max_height(segment: Any, floor: float = 0.0) -> float:
     return max(float(w[2]) for w in segment.waypoints) - floor
 
 
+def built_text(mission: Mission) -> str:
+    """What a built mission is, in words: ``3 segments: walk → take-off → fly``."""
+    return f"{plural(len(mission.segments), 'segment')}: " + " → ".join(kind_text(s.kind) for s in mission.segments)
+
+
 def segment_table(mission: Mission, current: int | None = None) -> str:
     """The mission as a Markdown table (HTML colour chips), the running segment in bold.
 
@@ -50,7 +55,7 @@ def segment_table(mission: Mission, current: int | None = None) -> str:
         a, b = s.start, s.end
         chip = (f"<span style='display:inline-block;width:0.7em;height:0.7em;border-radius:2px;"
                 f"background:rgb{KIND_RGB[s.kind]};margin-right:0.3em'></span>")
-        kind = s.kind.value if s.kind is not SegmentKind.TAKEOFF else "take-off"
+        kind = kind_text(s.kind)
         peak = f", **max {max_height(s, floor):.1f} m**" if s.kind is SegmentKind.FLY else ""
         row = (f"| {i + 1} | {chip}{kind} | ({a[0]:.1f}, {a[1]:.1f}, {a[2]:.1f}) → "
                f"({b[0]:.1f}, {b[1]:.1f}, {b[2]:.1f}){peak} | {s.length:.2f} m |")
@@ -129,8 +134,7 @@ class MissionView:
         except SessionError as exc:
             tell(event.client, "No mission", str(exc), "yellow")
             return
-        kinds = " → ".join(mission.kinds())
-        tell(event.client, "Mission built", f"{plural(len(mission.segments), 'segment')}: {kinds}", "green")
+        tell(event.client, "Mission built", built_text(mission), "green")
 
     def _on_execute(self, event: Any) -> None:
         mission = self._session.mission

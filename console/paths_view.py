@@ -25,7 +25,7 @@ from planner.mission import Mission, SegmentKind
 from .client_notice import tell
 from .picking import SELECT_MODIFIER, click_intent, drop_lines, top_view, typed_goal
 from .session import MISSION, ROUTE, SETTINGS, Session, SessionError
-from .wording import plural
+from .wording import kind_text, plural
 
 log = logging.getLogger(__name__)
 
@@ -59,7 +59,7 @@ def legend_html() -> str:
         return (f"<span style='display:inline-block;width:0.8em;height:0.8em;border-radius:2px;"
                 f"background:rgb{rgb};margin:0 0.3em 0 0.6em;vertical-align:-0.05em'></span>{text}")
     return ("<small>" + chip(CANDIDATE_RGB, "candidate") + chip(REGISTERED_RGB, "registered") + "<br>"
-            + "".join(chip(KIND_RGB[k], k.value) for k in SegmentKind) + "</small>")
+            + "".join(chip(KIND_RGB[k], kind_text(k)) for k in SegmentKind) + "</small>")
 
 
 class PathsView:

@@ -30,6 +30,12 @@ def mode_text(mode: Any) -> str:
     return text.replace("_", " ").replace("-", " ").lower() if text else "unknown"
 
 
+def kind_text(kind: Any) -> str:
+    """A mission segment kind as the operator reads it: ``takeoff`` -> ``take-off`` (others as they are)."""
+    text = mode_text(kind)
+    return "take-off" if text == "takeoff" else text
+
+
 def natural_key(text: str) -> tuple[Any, ...]:
     """Sort key that orders the numbers inside ids by value: ``box2`` < ``box10`` (case-blind)."""
     parts = _DIGITS.split(str(text))

@@ -53,3 +53,24 @@ def test_the_session_notice_for_two_removed_segments_agrees_in_number(tmp_path) 
     assert ("registered segments 1-2 (to (4.62, 1.62, 0.00), (4.62, 3.12, 0.00)) now cross obstacles and were removed"
             in body), body
     assert body.endswith("Undo brings them back."), body
+
+
+def _flight_mission():
+    from planner.mission import Mission, MissionSegment, SegmentKind
+
+    return Mission((
+        MissionSegment(SegmentKind.WALK, ((0.5, 0.5, 0.0), (1.0, 0.5, 0.0))),
+        MissionSegment(SegmentKind.TAKEOFF, ((1.0, 0.5, 0.0), (1.0, 0.5, 0.4))),
+        MissionSegment(SegmentKind.FLY, ((1.0, 0.5, 0.4), (2.0, 0.5, 1.5))),
+        MissionSegment(SegmentKind.LAND, ((2.0, 0.5, 1.5), (2.0, 0.5, 0.0))),
+    ), bounds_min=(0.0, 0.0, 0.0), bounds_max=(5.0, 8.0, 3.0))
+
+
+def test_segment_kinds_read_as_words_everywhere_the_operator_sees_them() -> None:
+    from console.mission_view import built_text, segment_table
+    from console.paths_view import legend_html
+
+    mission = _flight_mission()
+    assert built_text(mission) == "4 segments: walk → take-off → fly → land"
+    assert "take-off" in segment_table(mission) and "takeoff" not in segment_table(mission)
+    assert "take-off" in legend_html() and "takeoff" not in legend_html()  # the legend names what the table says
