@@ -11,6 +11,7 @@ World frame, z up, the floor at ``floor_z`` [m] (the planner's ground, z = 0 by 
 
 from __future__ import annotations
 
+import math
 import statistics
 from typing import Sequence
 
@@ -27,9 +28,34 @@ CAUSE = ("the camera pose used for this photo is probably wrong: check the camer
          "(camera.toml [mount] position z and pitch_deg, or the photo's camera_height and gravity_cam)")
 
 
+RESTS_ON = 0.1
+"""An object whose bottom is this close [m] to another's top, over its footprint, stands on it."""
+
+
 def _bottoms(objects: Sequence[SceneObject], floor_z: float) -> list[tuple[str, float]]:
     return [(o.label, float(o.position[2]) - float(o.size[1]) / 2.0 - floor_z)
             for o in objects if o.frame == "world" and o.size_known]
+
+
+def _rests_on_another(o: SceneObject, others: Sequence[SceneObject]) -> bool:
+    """Whether ``o``'s bottom sits on the top of another object of the photo (a stacked box, a cup on a desk)."""
+    bottom = float(o.position[2]) - float(o.size[1]) / 2.0
+    for b in others:
+        if b is o or b.frame != "world":
+            continue
+        top = float(b.position[2]) + float(b.size[1]) / 2.0
+        reach = max(float(b.size[0]), float(b.size[2])) / 2.0  # footprint radius, any yaw
+        if abs(bottom - top) <= RESTS_ON and math.hypot(o.position[0] - b.position[0], o.position[1] - b.position[1]) <= reach:
+            return True
+    return False
+
+
+def _floor_evidence(objects: Sequence[SceneObject]) -> list[SceneObject]:
+    """The objects whose box bottom can show a floating photo: whole in the image (a box cut by the
+    border is placed from part of itself) and standing on nothing else of the photo (the upper boxes
+    of a stack seen from the air float rightly)."""
+    world = [o for o in objects if o.frame == "world"]
+    return [o for o in world if not o.cut and not _rests_on_another(o, world)]
 
 
 def floor_check(scene: Scene, floor_z: float = 0.0, *, under_limit: float = UNDER_LIMIT,
@@ -40,6 +66,8 @@ def floor_check(scene: Scene, floor_z: float = 0.0, *, under_limit: float = UNDE
     lowest objects of a room stand on the floor; single objects cut by the image border or hidden
     behind others land off it by up to ~0.2 m even with the right pose, so one object proves
     nothing); with fewer than :data:`FEW` objects it is the lowest bottom, judged with 1.5x the limits.
+    Floating is judged only on objects the image border does not cut and that stand on no other
+    object of the photo, so a photo from the air of the upper boxes of a stack is not flagged.
 
     Args:
         scene: One photo's objects in the world frame (known-size objects are judged).
@@ -63,7 +91,13 @@ def floor_check(scene: Scene, floor_z: float = 0.0, *, under_limit: float = UNDE
         under = sorted((b, label) for label, b in bottoms if b < -under_at)
         named = ", ".join(f"{label} {b:+.2f} m" for b, label in under[:4])
         return [f"objects land under the floor ({what} is {-ground:.2f} m under it; {named}): {CAUSE}"]
-    if len(values) >= 2 and ground > float_at:
+    evidence = sorted(b for _, b in _bottoms(_floor_evidence(scene.objects), floor_z))
+    if len(evidence) >= FEW:
+        ground = float(statistics.quantiles(evidence, n=4, method="inclusive")[0])
+        what, float_at = "the lower quartile of the box bottoms", float_limit
+    elif evidence:
+        ground, what, float_at = evidence[0], "the lowest box bottom", 1.5 * float_limit
+    if len(evidence) >= 2 and ground > float_at:
         return [f"objects float over the floor ({what} is {ground:.2f} m over it, none stands on it): {CAUSE}"]
     return []
 
