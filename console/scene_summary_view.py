@@ -26,6 +26,7 @@ from planner.scene_graph import build_scene_graph
 from planner.scene_summary import nice, summarize
 
 from .client_notice import tell
+from .wording import natural_key
 from .session import GRID, ROBOT, SCENE, Session
 
 log = logging.getLogger(__name__)
@@ -41,6 +42,12 @@ TURN_REFRESH = math.radians(20.0)
 def option_label(label: str, oid: str) -> str:
     """The dropdown entry of an object: its label as words and its id."""
     return f"{nice(label)} · {oid}"
+
+
+def goto_entries(objects: Any) -> dict[str, str]:
+    """The Go to list, dropdown entry -> object id, by label then id in natural order (box-2 before box-10)."""
+    ordered = sorted(objects, key=lambda o: (natural_key(nice(o.label)), natural_key(o.id)))
+    return {option_label(o.label, o.id): o.id for o in ordered}
 
 
 def summary_html(text: str) -> str:
@@ -132,7 +139,7 @@ class SceneSummaryView:
             if self._stop.is_set():
                 return text  # shutting down: the server may be gone
             self._html.content = summary_html(text)
-            entries = {option_label(o.label, o.id): o.id for o in sorted(scene.objects, key=lambda o: (o.label, o.id))}
+            entries = goto_entries(scene.objects)
             self._ids = entries
             if entries:
                 self._goto.options = (PLACEHOLDER, *entries)

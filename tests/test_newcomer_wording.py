@@ -74,3 +74,13 @@ def test_segment_kinds_read_as_words_everywhere_the_operator_sees_them() -> None
     assert built_text(mission) == "4 segments: walk → take-off → fly → land"
     assert "take-off" in segment_table(mission) and "takeoff" not in segment_table(mission)
     assert "take-off" in legend_html() and "takeoff" not in legend_html()  # the legend names what the table says
+
+
+def test_the_go_to_list_is_in_natural_order() -> None:
+    from console.scene_summary_view import goto_entries
+
+    objs = [SceneObject(i, "cardboard_box", (1.0, 1.0, 0.2), (0.45, 0.4, 0.45))
+            for i in ("cardboard_box-10", "cardboard_box-2", "cardboard_box-1", "cardboard_box-2-2")]
+    objs.append(SceneObject("compressor-1", "compressor", (2.0, 1.0, 0.2), (0.4, 0.5, 0.4)))
+    ids = list(goto_entries(objs).values())
+    assert ids == ["cardboard_box-1", "cardboard_box-2", "cardboard_box-2-2", "cardboard_box-10", "compressor-1"]
