@@ -151,6 +151,7 @@ class MappingJob:
             if self._thread is not None and self._thread.is_alive():
                 return False
             self._thread = threading.Thread(target=self.run, name="mapping-job", daemon=True)
+            self._report(0.0, "starting")  # every tab sees the capture running from the click on
             self._thread.start()
             return True
 

@@ -30,6 +30,7 @@ REPO = Path(__file__).resolve().parents[1]
 
 from console.app import ConsoleApp, ConsoleConfig, is_loopback, wait_until  # noqa: E402
 from console.topics import RUN  # noqa: E402
+from console.mapping_job import JOB_NAME  # noqa: E402
 from pipeline.scene import Scene, SceneObject  # noqa: E402
 
 
@@ -164,7 +165,7 @@ def test_operator_maps_the_room_and_builds_a_mission(console: ConsoleApp, tmp_pa
 
             # --- Capture & map (simulated robot, ground-truth perception) ---------------------------
             capture.click()
-            assert wait_until(lambda: not session.job.running and session.job.fraction == 1.0, 60), session.job
+            assert wait_until(lambda: session.job.name == JOB_NAME and not session.job.running and session.job.fraction == 1.0, 60), session.job
             assert len(session.scene.objects) >= 10, "the first photo should show the obstacles in front"
             counts = session.grid.counts()
             assert counts["occupied"] > 0 and counts["dangerous"] > 0
