@@ -133,8 +133,8 @@ def test_commands_queued_behind_a_blocked_link_are_not_resent_late_and_the_truth
         last_send = time.monotonic()
         time.sleep(1.0)  # nothing more goes out for the hold / landing
         assert len(emu.record.received) == handled  # all queued behind the block
+        unblocked_at = time.monotonic()  # before the unblock: the emulator may handle the queue at once
         emu.blocked = False
-        unblocked_at = time.monotonic()
         assert eventually(lambda: emu.record.late > 0)
         assert eventually(lambda: any("link restored after the failsafe" in m for m in events(manager))), \
             events(manager)
