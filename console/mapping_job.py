@@ -107,7 +107,8 @@ class MappingJob:
         self._take_photo = take_photo
         self.perceiver = perceiver
         self.preload = preload
-        self._lock = threading.Lock()
+        # re-entrant: start() reports 'starting' under it and the session's listeners read ``held`` then
+        self._lock = threading.RLock()
         self._thread: threading.Thread | None = None
         self._held: tuple[Scene, str] | None = None
 
