@@ -25,6 +25,7 @@ import numpy as np
 import pytest
 
 from console.app import ConsoleApp, ConsoleConfig, wait_until
+from console.mapping_job import JOB_NAME
 from console.objects_view import NONE_CHOICE
 from console.picking import ray_plane, top_view
 from test_console_e2e import BROWSER_ARGS, CHROMIUM, VIEWPORT, _project, _ray_hits_box, console, needs_browser  # noqa: F401
@@ -104,11 +105,11 @@ def test_goals_go_through_objects_typed_goals_top_view_and_the_disconnected_bann
             page.goto(app.url)
             capture = page.get_by_role("button", name="Capture & map")
             capture.wait_for(timeout=60_000)
-            assert wait_until(lambda: len(app.server.get_clients()) == 1, 30), "the page did not connect"
+            assert wait_until(lambda: len(app.server.get_clients()) == 1, 60), "the page did not connect"
             assert page.evaluate(BANNER_JS) == "none"  # connected: no banner
 
             capture.click()
-            assert wait_until(lambda: not session.job.running and session.job.fraction == 1.0, 120), session.job
+            assert wait_until(lambda: session.job.name == JOB_NAME and not session.job.running and session.job.fraction == 1.0, 120), session.job
             assert len(session.scene.objects) >= 10
             assert wait_until(lambda: len(app.views["objects"].drawn_ids()) == len(session.scene.objects), 30)
             client = next(iter(app.server.get_clients().values()))
@@ -128,7 +129,7 @@ def test_goals_go_through_objects_typed_goals_top_view_and_the_disconnected_bann
             goal = session.route_snapshot().candidate_goal
             assert goal[2] == 0.0 and math.dist(goal[:2], target[:2]) < 0.3, (goal, target)
             assert session.selected is None, f"{session.selected.id} was selected instead"
-            assert wait_until(lambda: "drops" not in app.views["paths"].drawn(), 10)  # a floor goal needs no drop line
+            assert wait_until(lambda: "drops" not in app.views["paths"].drawn(), 60)  # a floor goal needs no drop line
             # notices sit at the bottom right of the 3D view, clear of its centre and upper left (an
             # error-like notice that stays, so the check does not race an auto-close)
             handle = client.add_notification("Layout check", "stays until closed", color="red", auto_close_seconds=None)
@@ -142,14 +143,14 @@ def test_goals_go_through_objects_typed_goals_top_view_and_the_disconnected_bann
 
             # --- altitude mode: a click on an object gives a goal in the air in front of it --------------
             session.set_goal_mode("altitude", 1.5)
-            page.get_by_role("textbox", name="Goal on").or_(page.get_by_label("Goal on")).first.wait_for(timeout=10_000)
+            page.get_by_role("textbox", name="Goal on").or_(page.get_by_label("Goal on")).first.wait_for(timeout=60_000)
             obj, opx, hit = _object_over_free_air(app, cam, 1.5)
             click(opx)
             assert wait_until(lambda: (session.route_snapshot().candidate_goal or (0, 0, 0))[2] == pytest.approx(1.5), 60), \
                 f"the altitude-mode click on {obj.id} made no goal at 1.5 m"
             goal = session.route_snapshot().candidate_goal
             assert math.dist(goal[:2], hit[:2]) < 0.3 and session.selected is None, (goal, hit, session.selected)
-            assert wait_until(lambda: "drops" in app.views["paths"].drawn(), 10)  # the air goal's drop line
+            assert wait_until(lambda: "drops" in app.views["paths"].drawn(), 60)  # the air goal's drop line
             session.set_goal_mode("ground")
 
             # --- Shift-click selects (highlighted, in the list); Deselect clears the list ------------------
@@ -158,7 +159,7 @@ def test_goals_go_through_objects_typed_goals_top_view_and_the_disconnected_bann
             page.keyboard.up("Shift")
             assert wait_until(lambda: session.selected is not None and session.selected.id == obj.id, 30), session.selected
             objects = app.views["objects"]
-            assert wait_until(lambda: objects.highlighted() == obj.id and objects.chooser_value() == obj.id, 10)
+            assert wait_until(lambda: objects.highlighted() == obj.id and objects.chooser_value() == obj.id, 60)
             chooser = page.get_by_label("Select object")
             page.wait_for_function("([el, v]) => el.value === v", arg=[chooser.element_handle(), obj.id], timeout=30_000)
             page.get_by_role("button", name="Deselect").click()

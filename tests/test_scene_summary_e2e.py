@@ -57,7 +57,7 @@ def test_copy_the_summary_and_go_to_the_robot_dog(tmp_path: Path) -> None:
                 copy = page.get_by_role("button", name="Copy")
                 copy.scroll_into_view_if_needed()
                 copy.click()
-                page.get_by_role("button", name="Copied").wait_for(timeout=10_000)
+                page.get_by_role("button", name="Copied").wait_for(timeout=60_000)
                 copied = page.evaluate("navigator.clipboard.readText()")
                 assert copied == view.text  # the whole summary, as the server wrote it
 
