@@ -38,6 +38,13 @@ def max_height(segment: Any, floor: float = 0.0) -> float:
     return max(float(w[2]) for w in segment.waypoints) - floor
 
 
+def no_mission_text(registered: int) -> str:
+    """The mission panel without a mission: what to do next, given the count of registered segments."""
+    if registered:
+        return "<small>No mission yet: <b>Build mission</b> turns the registered path into one.</small>"
+    return "<small>No mission yet: register a path, then <b>Build mission</b>.</small>"
+
+
 def built_text(mission: Mission) -> str:
     """What a built mission is, in words: ``3 segments: walk → take-off → fly``."""
     return f"{plural(len(mission.segments), 'segment')}: " + " → ".join(kind_text(s.kind) for s in mission.segments)
@@ -167,7 +174,7 @@ class MissionView:
             mission = self._session.mission
             run: RunStatus = self._session.run
             if mission is None:
-                self._table.content = "<small>No mission yet: register a path, then <b>Build mission</b>.</small>"
+                self._table.content = no_mission_text(len(self._session.route_snapshot().registered))
             else:
                 self._table.content = segment_table(mission, run.segment if run.active else None)
             view = self._session.operator_state(self._runner is not None)

@@ -267,7 +267,8 @@ class PathsView:
     def _route_text(r: Any) -> str:
         def length(p: np.ndarray) -> float:
             return float(np.linalg.norm(np.diff(p, axis=0), axis=1).sum()) if len(p) > 1 else 0.0
-        parts = [f"Start ({r.start[0]:.2f}, {r.start[1]:.2f}) m"]
+        off_floor = abs(float(r.start[2])) >= 0.005  # in the air: the route starts at its height
+        parts = [f"Start ({r.start[0]:.2f}, {r.start[1]:.2f}" + (f", {r.start[2]:.2f}) m" if off_floor else ") m")]
         if r.registered:
             total = sum(length(p) for p in r.registered)
             parts.append(f"<b style='color:rgb{REGISTERED_RGB}'>{plural(len(r.registered), 'registered segment')}</b>, {total:.2f} m")

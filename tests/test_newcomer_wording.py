@@ -84,3 +84,22 @@ def test_the_go_to_list_is_in_natural_order() -> None:
     objs.append(SceneObject("compressor-1", "compressor", (2.0, 1.0, 0.2), (0.4, 0.5, 0.4)))
     ids = list(goto_entries(objs).values())
     assert ids == ["cardboard_box-1", "cardboard_box-2", "cardboard_box-2-2", "cardboard_box-10", "compressor-1"]
+
+
+def test_the_route_start_says_its_height_when_the_robot_hovers() -> None:
+    from types import SimpleNamespace
+
+    from console.paths_view import PathsView
+
+    hovering = SimpleNamespace(start=(2.62, 0.62, 1.62), registered=(), candidate=None, candidate_goal=None)
+    assert "Start (2.62, 0.62, 1.62) m" in PathsView._route_text(hovering)
+    standing = SimpleNamespace(start=(2.5, 0.7, 0.0), registered=(), candidate=None, candidate_goal=None)
+    assert "Start (2.50, 0.70) m" in PathsView._route_text(standing)  # on the floor: x, y as before
+
+
+def test_no_mission_text_does_not_ask_for_a_path_that_is_registered() -> None:
+    from console.mission_view import no_mission_text
+
+    assert "register a path" in no_mission_text(registered=0)
+    text = no_mission_text(registered=2)
+    assert "register a path" not in text and "Build mission" in text
