@@ -205,6 +205,14 @@ class Recording:
                     f.seek(size - len(MCAP_MAGIC))
                 if size < 2 * len(MCAP_MAGIC) or f.read(len(MCAP_MAGIC)) != MCAP_MAGIC:
                     if not self.salvage:
+                        from .session_lock import holder
+
+                        pid = holder(p.resolve().parent.parent) if p.resolve().parent.name == "recordings" else None
+                        if pid is not None:
+                            who = f"PID {pid}" if pid else "its PID unknown"
+                            raise ReplayError(f"{p}: still being written by the running console ({who}): stop that "
+                                              "console to replay the whole run, or --salvage to replay it up to "
+                                              "its last two seconds")
                         raise ReplayError(f"{p}: truncated (no MCAP footer): the recording was not finished, e.g. the "
                                           "console was killed or the disk filled up; --salvage reads what it holds")
                     f.seek(0)

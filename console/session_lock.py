@@ -42,6 +42,27 @@ def _alive(pid: int) -> bool:
     return True
 
 
+def holder(folder: str | Path) -> int | None:
+    """The PID of the running console that holds ``folder``'s lock (0 if unknown), or ``None`` when free.
+
+    Only looks: opens the lock file read-only and tries a shared lock, which a console's exclusive
+    lock refuses. A folder without a lock file (or one that cannot be read) has no holder.
+    """
+    try:
+        fd = os.open(Path(folder) / LOCK_FILE, os.O_RDONLY)
+    except OSError:
+        return None
+    try:
+        fcntl.flock(fd, fcntl.LOCK_SH | fcntl.LOCK_NB)
+    except BlockingIOError:
+        return _pid_in(fd) or 0
+    except OSError:
+        return None
+    finally:
+        os.close(fd)  # also drops the shared lock if it was taken
+    return None
+
+
 class SessionLock:
     """The exclusive lock on a session ``folder`` (created if missing); use :meth:`acquire`, :meth:`release`.
 

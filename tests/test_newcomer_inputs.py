@@ -52,3 +52,27 @@ def test_bench_refuses_an_iou_outside_0_1(tmp_path: Path, value: str, capsys: py
     err = capsys.readouterr().err
     assert code == 2 and "--iou" in err and "Traceback" not in err
     assert not out.exists()
+
+
+def test_replaying_the_recording_a_running_console_is_writing_says_so(tmp_path: Path,
+                                                                      capsys: pytest.CaptureFixture[str]) -> None:
+    """A newcomer replays the session's recording while its console still runs: not 'the console was killed'."""
+    import os
+
+    from console.session_lock import SessionLock
+
+    session = tmp_path / "session"
+    (session / "recordings").mkdir(parents=True)
+    rec = session / "recordings" / "morphonavi-20260101-000000.mcap"
+    rec.write_bytes(b"\x89MCAP0\r\n" + b"\x00" * 64)  # the magic, no footer yet: being written
+    lock = SessionLock(session).acquire()
+    try:
+        code = main(["replay", str(rec), "--port", "0"])
+        err = capsys.readouterr().err
+        assert code == 2 and "Traceback" not in err
+        assert "still being written" in err and f"PID {os.getpid()}" in err and "--salvage" in err, err
+    finally:
+        lock.release()
+    code = main(["replay", str(rec), "--port", "0"])  # the console is gone: the file was left unfinished
+    err = capsys.readouterr().err
+    assert code == 2 and "the recording was not finished" in err and "still being written" not in err
