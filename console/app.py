@@ -209,14 +209,29 @@ class ConsoleApp:
             if not self.preload.join(120.0):
                 log.warning("the model loading did not end within 120 s")
 
-    def serve_forever(self) -> None:
-        """Block until Ctrl-C, then stop."""
+    def serve_forever(self, ready: Callable[[], None] | None = None) -> None:
+        """Block until Ctrl-C or SIGTERM (``kill``, a service manager), then stop: the recording is finished.
+
+        ``ready`` is called once both signals are handled (e.g. to print the URL).
+        """
+        import signal
+
+        def _terminate(signum: int, frame: Any) -> None:
+            raise KeyboardInterrupt
+
+        old = None
+        if threading.current_thread() is threading.main_thread():
+            old = signal.signal(signal.SIGTERM, _terminate)
         try:
+            if ready is not None:
+                ready()
             while not self._stopped.wait(0.5):
                 pass
         except KeyboardInterrupt:
             pass
         finally:
+            if old is not None:
+                signal.signal(signal.SIGTERM, old)
             self.stop()
 
     # --- robot link ---------------------------------------------------------------------------------

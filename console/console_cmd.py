@@ -221,8 +221,8 @@ def cmd_console(args: argparse.Namespace) -> int:
             if isinstance(exc, (LinkError, OSError, ValueError)):
                 raise CliError(f"cannot start the console: {exc}") from None
             raise
-        print(f"MorphoNavi console: open {app.url} in a browser (Ctrl-C to stop)", flush=True)
-        app.serve_forever()
+        app.serve_forever(ready=lambda: print(f"MorphoNavi console: open {app.url} in a browser (Ctrl-C to stop)",
+                                              flush=True))
     finally:
         lock.release()
     return 0
