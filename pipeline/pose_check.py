@@ -38,14 +38,18 @@ def _bottoms(objects: Sequence[SceneObject], floor_z: float) -> list[tuple[str, 
 
 
 def _rests_on_another(o: SceneObject, others: Sequence[SceneObject]) -> bool:
-    """Whether ``o``'s bottom sits on the top of another object of the photo (a stacked box, a cup on a desk)."""
+    """Whether ``o``'s bottom sits on the top of another object of the photo (a stacked box, a cup on a desk),
+    or above one cut by the image's bottom border (whose top is then as uncertain as its bottom)."""
     bottom = float(o.position[2]) - float(o.size[1]) / 2.0
     for b in others:
         if b is o or b.frame != "world":
             continue
         top = float(b.position[2]) + float(b.size[1]) / 2.0
         reach = max(float(b.size[0]), float(b.size[2])) / 2.0  # footprint radius, any yaw
-        if abs(bottom - top) <= RESTS_ON and math.hypot(o.position[0] - b.position[0], o.position[1] - b.position[1]) <= reach:
+        if math.hypot(o.position[0] - b.position[0], o.position[1] - b.position[1]) > reach:
+            continue
+        # on its top, or above one whose lower part the image border hides (its top is uncertain too)
+        if abs(bottom - top) <= RESTS_ON or ("bottom" in b.cut and bottom >= float(b.position[2])):
             return True
     return False
 

@@ -6,6 +6,8 @@ from __future__ import annotations
 
 import math
 
+import pytest
+
 from pipeline.pose_check import floor_check
 from pipeline.scene import Scene, SceneObject
 
@@ -36,15 +38,20 @@ def test_stacked_boxes_under_the_floor_are_still_reported() -> None:
     assert "objects land under the floor" in warning
 
 
-def test_a_capture_hovering_in_front_of_the_line_of_boxes_mapped_with_the_right_pose_is_not_flagged() -> None:
-    """The console case: the simulated robot hovering at 1.6 m, 3.4 m before the line, camera level."""
+@pytest.mark.parametrize("x, y, z, yaw_deg", [(2.62, 0.62, 1.62, 90.0), (2.625, 0.625, 1.625, 89.5), (1.5, 0.6, 1.6, 80.0)])
+def test_a_capture_hovering_in_front_of_the_line_of_boxes_mapped_with_the_right_pose_is_not_flagged(
+        x: float, y: float, z: float, yaw_deg: float) -> None:
+    """The console case: the simulated robot hovering at 1.6 m, 3.4 m before the line, camera level.
+
+    (Not yet right: from lower, e.g. 1.1 m, the middle boxes' bottoms hidden behind the desks are
+    still taken for floating; the check knows nothing of occlusion.)"""
     from console.link.sim import DEFAULT_MOUNT, SimRobot
     from console.mapping_job import ground_truth_bundle_for
     from pipeline.catalog import default_catalog
     from pipeline.geometry import Pose
     from pipeline.mapper import Mapper
 
-    robot = SimRobot(start=Pose.from_xyz_yaw(2.62, 0.62, 1.62, math.pi / 2), manual_clock=True)
+    robot = SimRobot(start=Pose.from_xyz_yaw(x, y, z, math.radians(yaw_deg)), manual_clock=True)
     robot.connect()
     try:
         shot = robot.capture()
