@@ -158,7 +158,9 @@ def cmd_map(args: argparse.Namespace) -> int:
         debug_files = write_debug_images(result, image, args.debug)
     scene.save(out)
     t = scene.captures[0].timings
-    print(f"{len(scene.objects)} object(s) from {len(result.objects)} detection(s) in {t.get('total', 0.0):.2f} s "
+    n_obj, n_det = len(scene.objects), len(result.objects)
+    print(f"{n_obj} object{'' if n_obj == 1 else 's'} from {n_det} detection{'' if n_det == 1 else 's'} "
+          f"in {t.get('total', 0.0):.2f} s "
           f"(detect {t.get('detect', 0.0):.2f}, depth {t.get('depth', 0.0):.2f}, segment {t.get('segment', 0.0):.2f}, "
           f"distance {t.get('distance', 0.0):.2f})")
     for o in scene.objects:

@@ -76,3 +76,19 @@ def test_replaying_the_recording_a_running_console_is_writing_says_so(tmp_path: 
     code = main(["replay", str(rec), "--port", "0"])  # the console is gone: the file was left unfinished
     err = capsys.readouterr().err
     assert code == 2 and "the recording was not finished" in err and "still being written" not in err
+
+
+MODELS = Path(__file__).resolve().parents[2] / "shared" / "models"
+
+
+@pytest.mark.skipif(not (MODELS / "yolox_nano").is_dir(), reason=f"offline model weights not in {MODELS}")
+def test_map_counts_objects_and_detections_with_the_right_plural(tmp_path: Path,
+                                                                capsys: pytest.CaptureFixture[str]) -> None:
+    photo = tmp_path / "blank.png"
+    cv2.imwrite(str(photo), np.full((240, 320, 3), 90, np.uint8))  # nothing on it
+    cam = tmp_path / "camera.toml"
+    cam.write_text("[intrinsics]\nfx = 260.0\nfy = 260.0\ncx = 160.0\ncy = 120.0\nwidth = 320\nheight = 240\n")
+    code = main(["map", str(photo), "--camera", str(cam), "--out", str(tmp_path / "scene.json"),
+                 "--model-dir", str(MODELS)])
+    out = capsys.readouterr().out
+    assert code == 0 and "0 objects from 0 detections in" in out and "(s)" not in out, out
