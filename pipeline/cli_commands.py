@@ -95,6 +95,8 @@ def _models(args: argparse.Namespace, catalog: Catalog) -> Any:
     """Load the model set ``--models`` from ``--model-dir`` (checked first, as is $MORPHONAVI_MODELS)."""
     from pipeline.models.registry import MODEL_SETS
 
+    if args.threads is not None and args.threads < 1:
+        raise _UserError(f"--threads: must be at least 1, got {args.threads}")
     model_dir = check_model_dir(args.model_dir, "--model-dir")
     if args.models not in MODEL_SETS and ("/" in args.models or "\\" in args.models or Path(args.models).is_dir()):
         raise _UserError(f"--models {args.models}: --models picks a model set ({', '.join(MODEL_SETS)}); "

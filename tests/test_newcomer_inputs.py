@@ -92,3 +92,17 @@ def test_map_counts_objects_and_detections_with_the_right_plural(tmp_path: Path,
                  "--model-dir", str(MODELS)])
     out = capsys.readouterr().out
     assert code == 0 and "0 objects from 0 detections in" in out and "(s)" not in out, out
+
+
+@pytest.mark.parametrize("value", ["-1", "0"])
+def test_map_refuses_threads_below_one_naming_the_option(tmp_path: Path, value: str,
+                                                         capsys: pytest.CaptureFixture[str]) -> None:
+    photo = tmp_path / "blank.png"
+    cv2.imwrite(str(photo), np.full((240, 320, 3), 90, np.uint8))
+    cam = tmp_path / "camera.toml"
+    cam.write_text("[intrinsics]\nfx = 260.0\nfy = 260.0\ncx = 160.0\ncy = 120.0\nwidth = 320\nheight = 240\n")
+    out = tmp_path / "scene.json"
+    code = main(["map", str(photo), "--camera", str(cam), "--out", str(out), "--threads", value,
+                 "--model-dir", str(tmp_path / "none")])
+    err = capsys.readouterr().err
+    assert code == 2 and f"--threads: must be at least 1, got {value}" in err and not out.exists(), err
