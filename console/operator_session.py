@@ -72,11 +72,19 @@ class OperatorRules:
     _launch: Vec3 | None = None
     _retired_run: str | None = None  # id of an active run an edit retired (its abort is under way)
     _abort_run: Callable[[], None] | None = None
+    _battery_land: Callable[[], None] | None = None  # ends the run and lands here (VehicleCommands)
+    _battery_warned = 0  # the battery level last warned about: 0 ok, 1 low, 2 critical
+    _battery_acting = False  # the critical-battery landing was started (once per flight)
 
     # --- wiring --------------------------------------------------------------------------------
     def attach_runner(self, abort: Callable[[], None]) -> None:
         """Give the session the way to end the run an edit retires (the mission manager's abort)."""
         self._abort_run = abort
+
+    def attach_battery_land(self, land: Callable[[], None]) -> None:
+        """Give the session the way to end a run and land here at critical charge (blocking call,
+        run on its own thread)."""
+        self._battery_land = land
 
     # --- what the views show ---------------------------------------------------------------------
     def operator_state(self, has_runner: bool = True) -> OperatorView:
@@ -116,6 +124,7 @@ class OperatorRules:
         r, ws, route = self._robot, self._workspace, self._route  # type: ignore[attr-defined]
         if r is None:
             return False
+        self._battery_rules_locked(r)
         origin = rules.robot_origin(r, ws)
         if origin is not None and not r.armed and not rules.airborne(r, ws):
             self._launch = origin  # ArduPilot-like home: where it last stood disarmed
@@ -151,6 +160,41 @@ class OperatorRules:
         if abort is not None:
             threading.Thread(target=self._safe_abort, args=(abort,), name="retire-run", daemon=True).start()
         return None
+
+    def _battery_rules_locked(self, r: rules.RobotSnapshot) -> None:
+        """Warn every tab once per crossing of a battery threshold; at critical charge in the air,
+        end the run and land here (unless the vehicle's own failsafe acts)."""
+        level = {"ok": 0, "low": 1, "critical": 2}[rules.battery_level(r)]
+        if level > self._battery_warned:
+            why = rules.battery_blocker(r) or ""
+            title = "Battery critical" if level == 2 else "Battery low"
+            body = (f"{why}: the mission is ended and the robot lands where it is" if level == 2
+                    and rules.airborne(r, self._workspace) else why)  # type: ignore[attr-defined]
+            self._outbox_notice(Notice(title, body, "error" if level == 2 else "warning"))
+        if level >= self._battery_warned:
+            self._battery_warned = level
+        else:  # a recharge re-arms the warning, past a margin so a noisy reading warns once
+            b = getattr(r, "battery", None)
+            edge = rules.BATTERY_CRITICAL if self._battery_warned == 2 else rules.BATTERY_LOW
+            if b is None or b >= edge + rules.BATTERY_HYSTERESIS:
+                self._battery_warned = level
+        if not rules.airborne(r, self._workspace):  # type: ignore[attr-defined]
+            self._battery_acting = False
+            return
+        if self._battery_acting or rules.battery_action(r, self._run, self._workspace) is None:  # type: ignore[attr-defined]
+            return
+        land = self._battery_land
+        if land is None:
+            return
+        self._battery_acting = True
+        threading.Thread(target=self._safe_battery_land, args=(land,), name="battery-land", daemon=True).start()
+
+    @staticmethod
+    def _safe_battery_land(land: Callable[[], None]) -> None:
+        try:
+            land()
+        except Exception:
+            log.exception("battery critical: landing failed")
 
     @staticmethod
     def _safe_abort(abort: Callable[[], None]) -> None:

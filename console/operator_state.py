@@ -23,6 +23,11 @@ The rules:
   Return plan from the robot's position: off while it is unknown or stale; Return from the ground
   (a take-off) also waits for readiness. Hold and Disarm need no position.
 - **Goals inside the robot's margin are refused** with the reason (:func:`goal_clearance`).
+- **Battery** (like a ground station's low-battery warning and ArduPilot's battery failsafe):
+  below :data:`BATTERY_LOW` Execute is off with the reason (:func:`battery_blocker`) and every tab
+  is warned once per crossing; below :data:`BATTERY_CRITICAL` a running mission is ended and the
+  robot lands where it is (Land here), unless the vehicle's own failsafe already acts
+  (:func:`battery_action`). An unknown charge (``None``) never blocks.
 - **A mission that ends in the air** is flagged (:func:`ends_in_air`) so the operator can add a landing.
 - **A mission whose remaining segments cross an obstacle** (:func:`remaining_blocked`) is ended and
   re-planned from the robot.
@@ -49,6 +54,12 @@ START_TOLERANCE = 0.3
 (the simulator's own start tolerance)."""
 MOVING_MODES = frozenset({"walking", "taking_off", "flying", "landing"})
 """Robot modes in which it is under way (not at rest)."""
+BATTERY_LOW = 0.25
+"""Charge [0..1] below which Execute is off and the operator is warned (land or Return)."""
+BATTERY_CRITICAL = 0.10
+"""Charge [0..1] below which a running mission is ended and the robot lands where it is."""
+BATTERY_HYSTERESIS = 0.02
+"""How far [0..1] the charge must rise above a threshold before crossing it again warns again."""
 ROBOT_HEIGHT = 0.45
 """Height of the robot's body above the floor [m], for the clearance of ground goals."""
 
@@ -88,6 +99,42 @@ def readiness_blocker(robot: RobotSnapshot) -> str | None:
     if getattr(robot, "ready", True):
         return None
     return "the robot is not ready: " + (getattr(robot, "readiness", "") or "the vehicle says so")
+
+
+def battery_level(robot: RobotSnapshot | None) -> str:
+    """``"critical"``, ``"low"`` or ``"ok"`` for the robot's charge (``"ok"`` when it is unknown)."""
+    b = None if robot is None else getattr(robot, "battery", None)
+    if b is None or not isinstance(b, (int, float)) or not math.isfinite(b):
+        return "ok"  # unknown never blocks
+    if b < BATTERY_CRITICAL:
+        return "critical"
+    return "low" if b < BATTERY_LOW else "ok"
+
+
+def battery_blocker(robot: RobotSnapshot | None) -> str | None:
+    """Why the charge forbids a new mission (below :data:`BATTERY_LOW`), or ``None``."""
+    level = battery_level(robot)
+    if level == "ok":
+        return None
+    b = float(robot.battery)  # type: ignore[union-attr]
+    if level == "critical":
+        return f"battery {100 * b:.0f} %: critical (below {100 * BATTERY_CRITICAL:.0f} %), the robot must land"
+    return f"battery {100 * b:.0f} %: below {100 * BATTERY_LOW:.0f} %, land or Return"
+
+
+def own_failsafe(robot: RobotSnapshot) -> bool:
+    """Whether the vehicle is already bringing itself down (its failsafe or a landing)."""
+    return robot.mode in ("failsafe", "landing")
+
+
+def battery_action(robot: RobotSnapshot | None, run: RunStatus, ws: Workspace) -> str | None:
+    """What the console must do about a critical charge: ``"land"`` (end the run, land here), or
+    ``None`` (charge fine or unknown, on the ground, or the vehicle's own failsafe already acts)."""
+    if robot is None or battery_level(robot) != "critical" or not airborne(robot, ws):
+        return None
+    if own_failsafe(robot) or run.state == "failsafe":
+        return None
+    return "land"
 
 
 def robot_origin(robot: RobotSnapshot, ws: Workspace) -> Vec3 | None:
@@ -130,7 +177,7 @@ def execute_blocker(mission: Mission | None, robot: RobotSnapshot | None, run: R
         return "no state from the robot yet"
     if not robot.healthy:
         return link_lost(robot)
-    why = position_blocker(robot) or readiness_blocker(robot)
+    why = battery_blocker(robot) or position_blocker(robot) or readiness_blocker(robot)
     if why is not None:
         return why
     if not at_rest(robot):

@@ -6,11 +6,16 @@ link. Land here and Return are flown as small missions through the mission manag
 progress, Pause / Abort and the link-loss failsafe like any mission); Hold and Disarm go straight
 to the link (:meth:`~console.link.base.RobotLink.hold`, :meth:`~console.link.base.RobotLink.disarm`),
 so the simulator and MAVLink vehicles both do them.
+
+At critical battery (:data:`console.operator_state.BATTERY_CRITICAL`) the session calls
+:meth:`VehicleCommands.battery_land`: the running mission is aborted and the robot lands where it
+is through the same Land here path.
 """
 
 from __future__ import annotations
 
 import logging
+import time
 from typing import Any
 
 from .session import Session, SessionError
@@ -34,6 +39,27 @@ class VehicleCommands:
         self._session = session
         self._link = link
         self._runner = runner
+        if runner is not None:  # the console's commands (a view's read-only copy has no runner)
+            session.attach_battery_land(self.battery_land)
+
+    def battery_land(self, timeout: float = 60.0) -> None:
+        """Critical battery: end the running mission (the manager's abort; the robot holds) and
+        land here. Blocking (the session runs it on its own thread); tells every tab the outcome."""
+        run = self._session.run
+        if run.active and self._runner is not None:
+            try:
+                self._runner.abort()
+            except Exception as exc:  # ended meanwhile
+                log.info("battery critical: abort: %s", exc)
+            end = time.monotonic() + timeout  # the manager reports the end asynchronously
+            while self._session.run.active and time.monotonic() < end:
+                time.sleep(0.05)
+        try:
+            msg = self.run("land")
+        except SessionError as exc:
+            self._session.notify("Battery critical", f"cannot land here automatically: {exc}", "error")
+            return
+        self._session.notify("Battery critical", f"the mission was ended; {msg}", "warning")
 
     def _check(self, name: str) -> None:
         state = self._session.operator_state(self._runner is not None).commands.get(name)

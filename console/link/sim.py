@@ -71,6 +71,11 @@ class SimConfig:
         workspace: Bounds the robot may not leave and the occupancy resolution.
         link_loss_hold: During a link outage the robot holds (ends its segment) after this [s].
         link_loss_land: ... and lands where it is after this [s] (its own failsafe).
+        battery_critical: On-board battery failsafe (like ArduPilot's ``BATT_CRT_VOLT`` with
+            ``BATT_FS_CRT_ACT`` = Land): at or below this charge [0..1] in the air the robot ends its
+            segment and lands where it is by itself (mode ``failsafe``, status message "battery
+            critical: landing"); 0 disables it. Tests reach it quickly with a high ``drain_*`` rate or
+            :meth:`SimRobot.set_battery`.
     """
 
     walk_speed: float = 0.4
@@ -89,6 +94,7 @@ class SimConfig:
     workspace: Workspace = field(default_factory=Workspace)
     link_loss_hold: float = 1.0
     link_loss_land: float = 10.0
+    battery_critical: float = 0.10
 
     def __post_init__(self) -> None:
         for name in ("walk_speed", "fly_speed", "climb_rate", "descent_rate", "yaw_rate", "time_scale",
@@ -101,6 +107,9 @@ class SimConfig:
             v = getattr(self, name)
             if not (isinstance(v, (int, float)) and math.isfinite(v) and v >= 0):
                 raise ValueError(f"SimConfig.{name} must be >= 0, got {v!r}")
+        b = self.battery_critical
+        if not (isinstance(b, (int, float)) and math.isfinite(b) and 0.0 <= b < 1.0):
+            raise ValueError(f"SimConfig.battery_critical must be within 0..1, got {b!r}")
         if not 20.0 <= self.rate <= 1000.0:
             raise ValueError(f"SimConfig.rate must be within 20..1000 Hz, got {self.rate}")
 
@@ -171,6 +180,7 @@ class SimRobot(RobotLink):
         self._link_down_until = -1.0
         self._link_lost_at = 0.0
         self._self_landing = False
+        self._battery_landing = False  # the battery failsafe acted (once per flight)
         self._frozen: RobotState | None = None
         self._messages: list[tuple[int, str]] = []  # (number, "SEVERITY: text"), newest last
         self._n_messages = 0
@@ -311,6 +321,29 @@ class SimRobot(RobotLink):
             drain = (self.config.drain_fly if not self._landed or mode is Mode.TAKING_OFF
                      else self.config.drain_walk if mode is Mode.WALKING else self.config.drain_idle)
             self._battery = max(0.0, self._battery - drain * dt)
+            self._battery_failsafe()
+
+    def _battery_failsafe(self) -> None:
+        """The on-board battery failsafe: at critical charge in the air, land where it is (once per flight)."""
+        if self._landed:
+            self._battery_landing = False
+            return
+        if self._battery_landing or self._battery > self.config.battery_critical:
+            return
+        self._battery_landing = True
+        log.info("simulated robot: battery %.0f %%, landing by itself", 100 * self._battery)
+        self._say("CRITICAL", "battery critical: landing")
+        self._finish(RunStatus.FAILED, f"battery critical ({100 * self._battery:.0f} %): landing", say=False)
+        self._phases = [_Phase("descend", Mode.FAILSAFE, target=(float(self._pos[0]), float(self._pos[1]),
+                                                                   self._floor), speed=self.config.descent_rate),
+                        _Phase("settle", Mode.LANDING, duration=self.config.settle_time)]
+
+    def set_battery(self, fraction: float) -> None:
+        """Set the charge (for tests and demos) [0..1]; the failsafe acts on the next step."""
+        if not (isinstance(fraction, (int, float)) and math.isfinite(fraction) and 0.0 <= fraction <= 1.0):
+            raise ValueError(f"battery: must be a number within 0..1, got {fraction!r}")
+        with self._lock:
+            self._battery = float(fraction)
 
     def _mode(self) -> Mode:
         if self._phases:
