@@ -182,8 +182,8 @@ def test_full_walk_takeoff_fly_land_walk_mission(vehicle) -> None:
     assert fractions == sorted(fractions) and fractions[-1] == 1.0
     msgs = _events(manager)
     assert msgs.count("switching to flight control") == 1 and msgs.count("switching to ground control") == 2
-    # GCS heartbeat at 1 Hz (each wait of 1 s may wake late on a loaded machine: the count drifts low)
-    assert 0.6 * elapsed - 1.0 <= emu.record.gcs_heartbeats <= elapsed + 3, (elapsed, emu.record.gcs_heartbeats)
+    # GCS heartbeat at 1 Hz (each wait of 1 s may wake up to 0.25 s late on a loaded machine: the count drifts low)
+    assert elapsed / 1.25 - 1.5 <= emu.record.gcs_heartbeats <= elapsed + 3, (elapsed, emu.record.gcs_heartbeats)
 
 
 @pytest.mark.parametrize("vehicle", [{"config": replace(CFG, fly_speed=1.0)}], indirect=True)  # a long flight

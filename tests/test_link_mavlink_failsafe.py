@@ -198,7 +198,10 @@ def test_a_landing_starts_only_when_the_vehicle_has_stopped_over_the_spot() -> N
                                MissionSegment(LAND, ((2.5, 4.0, 1.5), (2.5, 4.0, 0.0)))), **BOUNDS))
         assert manager.wait(60.0) is MissionStatus.DONE, events(manager)
         touchdown = (ORIGIN[0] + emu.pos[1], ORIGIN[1] + emu.pos[0])
-        assert math.dist(touchdown, (2.5, 4.0)) < 0.05, touchdown
+        # LAND at the 0.15 m mark while still moving at ~0.67 m/s brakes 0.28 m: ~0.13 m past the spot. Stopped
+        # there it is a few cm at most, but a loaded machine's stale 'still' sample can catch the emulator at the
+        # turn of its slight overshoot (seen 6.1 cm under two CPU hogs, one run in four)
+        assert math.dist(touchdown, (2.5, 4.0)) < 0.1, touchdown
         assert emu.landed_state == mav.MAV_LANDED_STATE_ON_GROUND
 
 
