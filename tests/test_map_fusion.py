@@ -140,7 +140,8 @@ def test_a_box_on_a_desk_stays_on_the_desk() -> None:
 def test_a_chair_moved_by_hand_is_not_duplicated_by_the_next_capture() -> None:
     scene, _ = fuse(Scene(), capture(START, "start"))
     chair, err = nearest(scene, "office_chair-1")
-    assert err > 0.3  # the first estimate is off; the operator moves the chair to its right place
+    # the first estimate is off (0.14 m: cut by the border); the operator moves the chair to its right place
+    assert err > 0.1
     truth = TRUTH["office_chair-1"]
     scene = scene.with_objects([o.moved(truth.position, truth.yaw) if o.id == chair.id else o for o in scene.objects])
     again, report = fuse(scene, capture(LEFT, "left"))
