@@ -26,6 +26,7 @@ PANEL_WIDTH = 480  # [px] of the pictures sent to the browser
 FRUSTUM_SCALE = 0.25  # size of the frustum drawn at the capture pose [m]
 FRUSTUM_PHOTO_ALPHA = 0.45  # opacity of the photo on the frustum: paths behind it stay in sight
 NO_CAPTURE = "<small>No capture yet: press <b>Capture & map</b>.</small>"
+NO_CAPTURE_REPLAY = "<small>No capture yet at this time of the recording.</small>"
 
 
 def frustum_photo(image: np.ndarray, width: int = 240, alpha: float = FRUSTUM_PHOTO_ALPHA) -> np.ndarray:
@@ -108,13 +109,15 @@ class CaptureView:
         colors: ``label -> (r, g, b)`` for the boxes (the catalog's colours).
     """
 
-    def __init__(self, server: viser.ViserServer, session: Session, colors: Any = None) -> None:
+    def __init__(self, server: viser.ViserServer, session: Session, colors: Any = None, *,
+                 read_only: bool = False) -> None:
         self._server = server
+        self._empty = NO_CAPTURE_REPLAY if read_only else NO_CAPTURE  # replay: nothing to press
         self._session = session
         self._colors = colors
         self._lock = threading.Lock()
         gui = server.gui
-        self._caption = gui.add_markdown(NO_CAPTURE)
+        self._caption = gui.add_markdown(self._empty)
         self._photo = gui.add_image(placeholder("no photo yet"), label="Photo and detections", format="jpeg")
         self._depth = gui.add_image(placeholder("no depth map yet"), label="Depth", format="jpeg")
         self._frustum: Any = None
@@ -137,7 +140,7 @@ class CaptureView:
                 return
             self._photo.image = placeholder("no photo yet")
             self._depth.image = placeholder("no depth map yet")
-            self._caption.content = NO_CAPTURE
+            self._caption.content = self._empty
             if self._frustum is not None:
                 self._frustum.remove()
                 self._frustum = None

@@ -15,6 +15,7 @@ import viser
 
 from planner.mission import Mission, SegmentKind
 
+from . import operator_state as rules
 from .client_notice import tell
 from .paths_view import KIND_RGB
 from .wording import kind_text, plural
@@ -83,14 +84,17 @@ class MissionView:
         runner: The mission manager driving the robot (``None``: execution unavailable).
     """
 
-    def __init__(self, server: viser.ViserServer, session: Session, runner: MissionRunner | None) -> None:
+    def __init__(self, server: viser.ViserServer, session: Session, runner: MissionRunner | None, *,
+                 read_only: bool = False) -> None:
         self._server = server
+        self.read_only = bool(read_only)  # replay: nothing is built or changed
+        self._run_mission: tuple[str | None] | None = None  # the mission a finished run's line belongs to
         self._session = session
         self._runner = runner
         self._lock = threading.Lock()
         gui = server.gui
-        build = gui.add_button("Build mission", icon=viser.Icon.ROUTE,
-                               hint="Split the green path into walk / take-off / fly / land segments")
+        self._build = build = gui.add_button("Build mission", icon=viser.Icon.ROUTE, disabled=True,
+                                             hint="Split the green path into walk / take-off / fly / land segments")
         self._table = gui.add_markdown("<small>No mission yet: register a path, then Build mission.</small>")
         self._replan = gui.add_button("Re-plan from the robot", color="orange", icon=viser.Icon.ROUTE, visible=False,
                                       hint="Plan every registered goal again from where the robot is now")
@@ -173,8 +177,10 @@ class MissionView:
         with self._lock:
             mission = self._session.mission
             run: RunStatus = self._session.run
+            registered = len(self._session.route_snapshot().registered)
+            self._build.disabled = not rules.route_edits(False, registered, self.read_only)["build"]
             if mission is None:
-                self._table.content = no_mission_text(len(self._session.route_snapshot().registered))
+                self._table.content = no_mission_text(registered)
             else:
                 self._table.content = segment_table(mission, run.segment if run.active else None)
             view = self._session.operator_state(self._runner is not None)
@@ -191,15 +197,22 @@ class MissionView:
             if view.resume_blocker is not None:
                 notes.append(view.resume_blocker)
             self._why.content = "".join(f"<small style='color:#b35c00'>{html.escape(n)}</small><br>" for n in notes)
-            self._replan.visible = view.route_note is not None
-            self._landing.visible = view.air_end is not None and not run.active
+            self._replan.visible = view.route_note is not None and not self.read_only
+            self._landing.visible = view.air_end is not None and not run.active and not self.read_only
             self._pause.visible = run.state == "running"
             self._pause.disabled = run.state != "running"
             self._resume.visible = run.state in ("paused", "failsafe") and view.resume_blocker is None
             self._resume.disabled = run.state not in ("paused", "failsafe") or view.resume_blocker is not None
             self._abort.visible = run.active
             self._abort.disabled = not run.active
-            self._progress.visible = run.state != "idle"
+            # a finished run's line belongs to the mission shown when it ended: a new Build hides it
+            here = (mission.id if mission is not None else None,)
+            if run.active or run.state == "idle":
+                self._run_mission = None
+            elif self._run_mission is None:
+                self._run_mission = here
+            shown = run.state != "idle" and (run.active or self._run_mission == here)
+            self._progress.visible = shown
             self._progress.value = round(100.0 * max(0.0, min(1.0, run.fraction)), 1)
             self._progress.animated = run.state == "running"
             colors = {"done": "green", "aborted": "gray", "failed": "red", "paused": "yellow", "failsafe": "red"}
@@ -207,7 +220,7 @@ class MissionView:
             doing = f"{view.running}: " if view.running else ""
             self._status.content = (f"<small>{html.escape(doing)}<b>{html.escape(run.state)}</b>"
                                     f"{' · ' + html.escape(run.message) if run.message else ''}</small>"
-                                    if run.state != "idle" else "")
+                                    if shown else "")
 
 
 class ManagerRunner:

@@ -48,6 +48,7 @@ from planner.grid import CellState, CostWeights, PlanningGrid, Workspace
 from planner.mission import Mission, MissionError, MissionSegment, SegmentKind, mission_from_cells, simplify
 
 from .session_types import RobotSnapshot, RunStatus, Vec3, fmt_point
+from .wording import kind_text
 
 START_TOLERANCE = 0.3
 """How far [m] (3D) a mission or route may start from the robot and still count as starting there
@@ -191,6 +192,15 @@ def execute_blocker(mission: Mission | None, robot: RobotSnapshot | None, run: R
         return (f"the mission starts at {fmt_point(first)}, {d:.2f} m from the robot at {fmt_point(origin)}: "
                 "re-plan it from the robot")
     return None
+
+
+# --- route edits ---------------------------------------------------------------------------------
+def route_edits(has_candidate: bool, registered: int, read_only: bool = False) -> dict[str, bool]:
+    """Which route edit buttons have something to act on: Register / Discard need a candidate;
+    Undo / Build mission need a registered segment; Clear either (it drops both); nothing in a
+    read-only (replay) console."""
+    cand, reg = bool(has_candidate) and not read_only, registered > 0 and not read_only
+    return {"register": cand, "discard": cand, "undo": reg, "clear": reg or cand, "build": reg}
 
 
 # --- vehicle commands ----------------------------------------------------------------------------
@@ -385,12 +395,12 @@ def remaining_blocked(mission: Mission, from_segment: int, grid: PlanningGrid,
         for p in _samples(seg, ws.resolution / 2):
             cell = ws.cell_of(p)
             if cell is None:
-                return f"segment {i + 1} ({seg.kind.value}) leaves the workspace at {fmt_point(p)}"
+                return f"segment {i + 1} ({kind_text(seg.kind)}) leaves the workspace at {fmt_point(p)}"
             state = grid.state_at(cell)
             if state is CellState.OCCUPIED or (seg.kind in (SegmentKind.WALK, SegmentKind.FLY)
                                                and not math.isfinite(cost[cell])):
                 owner = grid.owner_of(cell)
-                return f"segment {i + 1} ({seg.kind.value}) now crosses {owner or 'an obstacle'} at {fmt_point(p)}"
+                return f"segment {i + 1} ({kind_text(seg.kind)}) now crosses {owner or 'an obstacle'} at {fmt_point(p)}"
     return None
 
 

@@ -22,6 +22,7 @@ import viser
 
 from planner.mission import Mission, SegmentKind
 
+from . import operator_state as rules
 from .client_notice import tell
 from .picking import SELECT_MODIFIER, click_intent, drop_lines, top_view, typed_goal
 from .session import MISSION, ROUTE, SETTINGS, Session, SessionError
@@ -70,8 +71,9 @@ class PathsView:
         session: The state it draws and edits.
     """
 
-    def __init__(self, server: viser.ViserServer, session: Session) -> None:
+    def __init__(self, server: viser.ViserServer, session: Session, *, read_only: bool = False) -> None:
         self._server = server
+        self.read_only = bool(read_only)  # replay: the route is shown, never edited
         self._session = session
         self._lock = threading.RLock()
         self._node_clicks: dict[int, float] = {}
@@ -88,17 +90,23 @@ class PathsView:
         ws = session.workspace
         self._alt = gui.add_number("Altitude [m]", s.altitude, min=ws.resolution, max=ws.max[2] - ws.floor - ws.resolution / 2,
                                    step=0.25, hint="Goal height above the floor in altitude mode [m]")
-        self._typed = gui.add_vector3("Goal x, y, z [m]", tuple(round(v, 2) for v in session.route_snapshot().start),
-                                      step=0.25, hint="World frame [m]; z is the goal height (0 = on the floor)")
-        add = gui.add_button("Add goal", icon=viser.Icon.MAP_PIN, hint="Plan a candidate to the typed point")
+        # text fields, not a number vector: the browser drops what is not a number and would keep the
+        # previous value without a word; here every typed text reaches the check and is named if bad
+        self._typed = tuple(gui.add_text(f"Goal {n} [m]", f"{v:.2f}", hint=f"World frame [m]; {n} of the goal"
+                                         + (" (its height: 0 = on the floor)" if n == "z" else ""))
+                            for n, v in zip("xyz", session.route_snapshot().start))
+        add = gui.add_button("Add goal", icon=viser.Icon.MAP_PIN, hint="Plan a candidate to the typed point",
+                             disabled=self.read_only)
         view = gui.add_button_group("View", ("Top view", "Default view"),
                                     hint="Top view: look straight down on the whole workspace (easy goal clicks)")
         self._route_md = gui.add_markdown("")
-        register = gui.add_button("Register", color="green", icon=viser.Icon.CHECK,
-                                  hint="Keep the red candidate: it turns green; the next goal starts from its end")
-        edit = gui.add_button_group("Edit", ("Discard", "Undo", "Clear"),
-                                    hint="Discard: drop the red candidate · Undo: remove the last green segment · "
-                                         "Clear: remove every path and the mission")
+        self._edit = {
+            "Register": gui.add_button("Register", color="green", icon=viser.Icon.CHECK,
+                                       hint="Keep the red candidate: it turns green; the next goal starts from its end"),
+            "Discard": gui.add_button("Discard", icon=viser.Icon.X, hint="Drop the red candidate"),
+            "Undo": gui.add_button("Undo", icon=viser.Icon.ARROW_BACK_UP, hint="Remove the last green segment"),
+            "Clear": gui.add_button("Clear", icon=viser.Icon.TRASH, hint="Remove every path and the mission"),
+        }
         gui.add_markdown(legend_html())
 
         self._alt.disabled = s.goal_mode != "altitude"
@@ -107,10 +115,10 @@ class PathsView:
         view.on_click(lambda e: self.set_view(e.client, str(e.target.value)))
         self._mode.on_update(self._on_mode)
         self._alt.on_update(self._on_mode)
-        register.on_click(lambda e: self._act(e, self._session.register, "Registered"))
-        actions = {"Discard": (self._session.discard, None), "Undo": (self._session.undo, "Undone"),
-                   "Clear": (self._session.clear_route, None)}
-        edit.on_click(lambda e: self._act(e, *actions[str(e.target.value)]) if e.target.value in actions else None)
+        actions = {"Register": (self._session.register, "Registered"), "Discard": (self._session.discard, None),
+                   "Undo": (self._session.undo, "Undone"), "Clear": (self._session.clear_route, None)}
+        for name, handle in self._edit.items():
+            handle.on_click(lambda e, a=actions[name]: self._act(e, *a))
         server.scene.on_click()(self._on_scene_click)
         session.subscribe(self._on_event)
         self.redraw_route()
@@ -127,7 +135,7 @@ class PathsView:
         t = self._node_clicks.pop(event.client_id, None)
         if t is not None and time.monotonic() - t < NODE_CLICK_WINDOW:
             return  # an object claimed this click (select mode)
-        if click_intent(self._session.settings.click_to_goal, None, on_object=False) != "goal":
+        if self.read_only or click_intent(self._session.settings.click_to_goal, None, on_object=False) != "goal":
             return
         threading.Thread(target=self.goal_from_click, args=(event.client, event.ray_origin, event.ray_direction),
                          daemon=True).start()
@@ -148,7 +156,11 @@ class PathsView:
         return True
 
     def _on_typed_goal(self, event: Any) -> None:
-        threading.Thread(target=self.goal_from_values, args=(event.client, tuple(self._typed.value)), daemon=True).start()
+        threading.Thread(target=self.goal_from_values, args=(event.client, self.typed_values()), daemon=True).start()
+
+    def typed_values(self) -> tuple[str, str, str]:
+        """The goal's x, y, z fields as typed (text; checked by :func:`typed_goal`)."""
+        return tuple(str(h.value) for h in self._typed)  # type: ignore[return-value]
 
     def goal_from_values(self, client: Any, values: Any) -> bool:
         """Plan a candidate to a typed ``(x, y, z)`` goal (world [m]); tell ``client`` if it fails."""
@@ -242,6 +254,9 @@ class PathsView:
         sc = self._server.scene
         with self._lock:  # read inside the lock: the last redraw always draws the latest route
             r = self._session.route_snapshot()
+            edits = rules.route_edits(r.candidate is not None, len(r.registered), self.read_only)
+            for name, handle in self._edit.items():
+                handle.disabled = not edits[name.lower()]
             self._put("start", lambda: sc.add_cylinder(
                 "/paths/start", radius=0.09, height=0.02, color=START_RGB,
                 position=(r.start[0], r.start[1], r.start[2] + 0.012), cast_shadow=False))

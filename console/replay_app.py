@@ -188,15 +188,15 @@ class ReplayApp:
 
         self.views["robot"] = RobotView(server, session, f"replay of {Path(rec.path).name}")
         with gui.add_folder("Mission"):
-            self.views["mission"] = MissionView(server, session, None)
+            self.views["mission"] = MissionView(server, session, None, read_only=True)
         with gui.add_folder("Map"):
             self.views["grid"] = GridView(server, session)
             self.views["objects"] = ObjectsView(server, session, layers=self.views["grid"].layers_folder)
         with gui.add_folder("Plan", expand_by_default=False):
-            self.views["paths"] = PathsView(server, session)
+            self.views["paths"] = PathsView(server, session, read_only=True)
         camera = gui.add_panel()
         with camera.add_tab("Camera", viser.Icon.CAMERA):
-            self.views["capture"] = CaptureView(server, session, colors=self.views["objects"].colors)
+            self.views["capture"] = CaptureView(server, session, colors=self.views["objects"].colors, read_only=True)
         camera.dock_left()
         camera.set_width(330)
         gui.main_panel.dock_right()

@@ -167,13 +167,10 @@ def test_goals_go_through_objects_typed_goals_top_view_and_the_disconnected_bann
             page.wait_for_function("([el, v]) => el.value === v", arg=[chooser.element_handle(), NONE_CHOICE], timeout=30_000)
 
             # --- a typed goal ---------------------------------------------------------------------------
-            first = page.get_by_label("Goal x, y, z [m]")
-            inputs = first.locator("xpath=ancestor::*[count(.//input)=3][1]//input")
-            assert inputs.count() == 3
             typed = next(p for p in ((1.5, 2.5), (1.0, 2.5), (2.0, 2.25), (1.0, 1.5)) if _free(app, np.array([*p, 0.0])))
-            for field, value in zip(range(3), (str(typed[0]), str(typed[1]), "0")):
-                inputs.nth(field).fill(value)
-            assert wait_until(lambda: tuple(app.views["paths"]._typed.value) == pytest.approx((*typed, 0.0)), 10)
+            for name, value in zip("xyz", (str(typed[0]), str(typed[1]), "0")):
+                page.get_by_label(f"Goal {name} [m]").fill(value)
+            assert wait_until(lambda: tuple(map(float, app.views["paths"].typed_values())) == pytest.approx((*typed, 0.0)), 10)
             page.get_by_role("button", name="Add goal").click()
             assert wait_until(lambda: math.dist((session.route_snapshot().candidate_goal or (9, 9, 9))[:2], typed) < 0.2, 60), \
                 session.route_snapshot().candidate_goal

@@ -86,7 +86,7 @@ def test_targets_outside_the_geofence_are_refused_before_moving(robot: SimRobot)
                    MissionSegment(TAKEOFF, ((2.5, 2.0, 0.0), (2.5, 2.0, 3.5)))),
                   bounds_min=(0.0, 0.0, 0.0), bounds_max=(5.0, 8.0, 3.0))
     manager = MissionManager(robot)
-    with pytest.raises(GeofenceError, match=r"segment 2 \(takeoff\) waypoint 2 \(2.50, 2.00, 3.50\)"):
+    with pytest.raises(GeofenceError, match=r"segment 2 \(take-off\) waypoint 2 \(2.50, 2.00, 3.50\)"):
         manager.start(bad)
     assert manager.progress().status is MissionStatus.IDLE
     assert robot.latest_state().position == pytest.approx(DEFAULT_START.translation)

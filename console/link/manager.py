@@ -42,6 +42,7 @@ import numpy as np
 
 from planner.mission import Mission, MissionSegment, SegmentKind
 
+from ..wording import kind_text  # plain words (take-off), no UI
 from .base import LinkError, RobotLink, RobotState, RunStatus, SegmentRun
 from .manager_safety import SafetyMixin
 
@@ -242,7 +243,7 @@ class MissionManager(SafetyMixin):
                 p = np.asarray(w, dtype=np.float64)
                 if not np.all(np.isfinite(p)) or np.any(p < lo - 1e-9) or np.any(p > hi + 1e-9):
                     raise GeofenceError(
-                        f"segment {i + 1} ({seg.kind.value}) waypoint {j + 1} ({p[0]:.2f}, {p[1]:.2f}, {p[2]:.2f}) "
+                        f"segment {i + 1} ({kind_text(seg.kind)}) waypoint {j + 1} ({p[0]:.2f}, {p[1]:.2f}, {p[2]:.2f}) "
                         f"is outside the geofence ({lo[0]:.2f}, {lo[1]:.2f}, {lo[2]:.2f})-"
                         f"({hi[0]:.2f}, {hi[1]:.2f}, {hi[2]:.2f}) m")
 
@@ -465,7 +466,7 @@ class MissionManager(SafetyMixin):
         ctl = _control(part.kind)
         if ctl != self._progress.control:
             self._emit("info", f"switching to {ctl} control", control=ctl)
-        what = f"segment {index + 1}/{n}: {part.kind.value}" + ("" if is_main else " (recovery)")
+        what = f"segment {index + 1}/{n}: {kind_text(part.kind)}" + ("" if is_main else " (recovery)")
         try:
             self.check_geofence(mission, [part])
         except GeofenceError as exc:
