@@ -178,16 +178,16 @@ class OperatorRules:
             edge = rules.BATTERY_CRITICAL if self._battery_warned == 2 else rules.BATTERY_LOW
             if b is None or b >= edge + rules.BATTERY_HYSTERESIS:
                 self._battery_warned = level
-        if not rules.airborne(r, self._workspace):  # type: ignore[attr-defined]
-            self._battery_acting = False
+        action = rules.battery_action(r, self._run, self._workspace)  # type: ignore[attr-defined]
+        if not rules.airborne(r, self._workspace) and not self._run.active:  # type: ignore[attr-defined]
+            self._battery_acting = False  # re-armed on the ground with nothing running (once per flight)
+        if action is None or self._battery_acting:
             return
-        if self._battery_acting or rules.battery_action(r, self._run, self._workspace) is None:  # type: ignore[attr-defined]
-            return
-        land = self._battery_land
-        if land is None:
+        act = self._battery_land if action == "land" else self._abort_run
+        if act is None:
             return
         self._battery_acting = True
-        threading.Thread(target=self._safe_battery_land, args=(land,), name="battery-land", daemon=True).start()
+        threading.Thread(target=self._safe_battery_land, args=(act,), name=f"battery-{action}", daemon=True).start()
 
     @staticmethod
     def _safe_battery_land(land: Callable[[], None]) -> None:

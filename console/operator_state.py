@@ -123,16 +123,33 @@ def battery_blocker(robot: RobotSnapshot | None) -> str | None:
     return f"battery {100 * b:.0f} %: below {100 * BATTERY_LOW:.0f} %, land or Return"
 
 
+def battery_text(robot: RobotSnapshot) -> str:
+    """The robot panel's battery (HTML-safe): the charge, and what a low or critical level means."""
+    b = getattr(robot, "battery", None)
+    if b is None or not isinstance(b, (int, float)) or not math.isfinite(b):
+        return "battery ?"
+    level = battery_level(robot)
+    if level == "critical":
+        return f"<b style='color:#d62728'>battery {100 * b:.0f}% CRITICAL: landing</b>"
+    if level == "low":
+        return f"<b style='color:#e67e22'>battery {100 * b:.0f}% low: land or Return</b>"
+    return f"battery {100 * b:.0f}%"
+
+
 def own_failsafe(robot: RobotSnapshot) -> bool:
     """Whether the vehicle is already bringing itself down (its failsafe or a landing)."""
     return robot.mode in ("failsafe", "landing")
 
 
 def battery_action(robot: RobotSnapshot | None, run: RunStatus, ws: Workspace) -> str | None:
-    """What the console must do about a critical charge: ``"land"`` (end the run, land here), or
-    ``None`` (charge fine or unknown, on the ground, or the vehicle's own failsafe already acts)."""
-    if robot is None or battery_level(robot) != "critical" or not airborne(robot, ws):
+    """What the console must do about a critical charge: ``"land"`` (in the air: end the run, land
+    here), ``"end"`` (on the ground: end a run still active, e.g. paused after the vehicle's own
+    failsafe landed it), or ``None`` (charge fine or unknown, nothing to end, or the vehicle's own
+    failsafe already acts: aborting would cancel its landing)."""
+    if robot is None or battery_level(robot) != "critical":
         return None
+    if not airborne(robot, ws):
+        return "end" if run.active else None
     if own_failsafe(robot) or run.state == "failsafe":
         return None
     return "land"

@@ -27,6 +27,7 @@ import trimesh
 import viser
 
 from .client_notice import tell
+from .operator_state import battery_text
 from .session import ROBOT, RUN, RobotSnapshot, Session, SessionError
 from .vehicle_commands import LABELS, VehicleCommands
 from .wording import mode_text
@@ -150,7 +151,7 @@ def status_text(r: RobotSnapshot | None, link_name: str) -> str:
         health = "<b style='color:#d62728'>LINK LOST</b>"
     if status == "unknown" and r.detail.startswith("position unknown"):
         shown_detail = ""  # the pose line says it
-    battery = "battery ?" if r.battery is None else f"battery {100 * r.battery:.0f}%"
+    battery = battery_text(r)  # the charge, low / critical (console.operator_state)
     armed = "armed" if r.armed else "disarmed"
     age = time.time() - r.stamp
     stale = f" · <b style='color:#d62728'>{age:.0f} s old</b>" if age > 2.0 else ""

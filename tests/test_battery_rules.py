@@ -88,6 +88,9 @@ def test_battery_none_does_not_block_execute(tmp_path: Path) -> None:
     assert rules.battery_action(_hover(None), RunStatus(), s.workspace) is None
     assert rules.battery_action(_hover(0.05), RunStatus(), s.workspace) == "land"
     assert rules.battery_action(_hover(0.05, mode="failsafe"), RunStatus(), s.workspace) is None  # its own failsafe
+    on_floor = RobotSnapshot(Pose.from_xyz_yaw(*START), mode="idle", armed=False, landed=True, battery=0.05)
+    assert rules.battery_action(on_floor, RunStatus(), s.workspace) is None
+    assert rules.battery_action(on_floor, RunStatus(state="paused"), s.workspace) == "end"
 
 
 def test_one_warning_per_crossing(tmp_path: Path) -> None:
@@ -181,5 +184,36 @@ def test_critical_charge_ends_a_running_mission_and_lands(tmp_path: Path) -> Non
         assert titles.count("Battery low") == 1 and titles.count("Battery critical") >= 1
         assert any("land here: landing at" in n.body for n in st.battery_notices())  # the Land here path
         assert st.robot.latest_state().battery == pytest.approx(0.08, abs=0.01)
+    finally:
+        st.close()
+
+
+def test_robot_panel_says_low_and_critical() -> None:
+    from console.robot_view import status_text
+
+    assert "battery 50%" in status_text(_hover(0.5), "sim") and "CRITICAL" not in status_text(_hover(0.5), "sim")
+    assert "battery 18% low: land or Return" in status_text(_hover(0.18), "sim")
+    assert "battery 8% CRITICAL: landing" in status_text(_hover(0.08), "sim")
+    assert "battery ?" in status_text(_hover(None), "sim")
+
+
+def test_the_vehicles_own_failsafe_lands_and_the_console_does_not_interfere(tmp_path: Path) -> None:
+    st = Stack(tmp_path / "s", SimConfig(time_scale=3.0, **FAST))  # the sim's failsafe at 10 %
+    try:
+        wait_for(lambda: st.session.robot is not None, what="first state")
+        assert st.session.add_goal((2.5, 3.5, 1.2)).ok
+        st.session.register()
+        st.runner.execute(st.session.build_mission())
+        wait_for(lambda: not st.robot.latest_state().landed and st.session.run.state == "running",
+                 what="the mission flying")
+        st.robot.set_battery(0.08)
+        wait_for(lambda: st.robot.latest_state().landed and not st.robot.latest_state().armed
+                 and not st.session.run.active, what="landed by itself")
+        assert any("battery critical: landing" in m for _, m in st.robot.latest_state().messages)
+        assert st.session.run.state == "aborted"  # the manager's paused mission was ended on the ground
+        # the console warned but did not fly its own Land here over the vehicle's failsafe
+        bodies = [n.body for n in st.battery_notices()]
+        assert bodies and not any("land here: landing at" in b for b in bodies), bodies
+        assert st.session.operator_state().execute_blocker is not None
     finally:
         st.close()
