@@ -99,6 +99,8 @@ class OperatorRules:
                 blocker = note
             retired = ("an edit retired this mission: it is being ended" if self._retired_run is not None
                        and run.active else None)
+            if retired is None and run.active and self._running is not None and not self._running.command:
+                retired = rules.battery_blocker(robot)  # low battery: the operator's mission does not resume
             return OperatorView(note, blocker, retired, rules.vehicle_commands(robot, run, ws, self._launch),
                                 rules.ends_in_air(self._mission, ws),  # type: ignore[attr-defined]
                                 self._running.command if self._running is not None and run.active else "",

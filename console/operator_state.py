@@ -264,8 +264,8 @@ def vehicle_commands(robot: RobotSnapshot | None, run: RunStatus, ws: Workspace,
         why = "the launch spot is unknown (the robot was never seen on the ground)"
     elif lost or nowhere:
         why = lost or nowhere
-    elif not up and readiness_blocker(robot):
-        why = readiness_blocker(robot) or ""
+    elif not up and (readiness_blocker(robot) or battery_blocker(robot)):  # Return from the ground takes off
+        why = readiness_blocker(robot) or battery_blocker(robot) or ""
     elif origin is not None and not up and gap(origin, launch) <= START_TOLERANCE:
         why = "the robot is at the launch spot"
     elif origin is None:

@@ -93,6 +93,17 @@ def test_battery_none_does_not_block_execute(tmp_path: Path) -> None:
     assert rules.battery_action(on_floor, RunStatus(state="paused"), s.workspace) == "end"
 
 
+def test_low_battery_refuses_return_from_the_ground_but_not_in_the_air(tmp_path: Path) -> None:
+    s = Session(tmp_path / "s", start=START, autosave=False)
+    s.spawn(Scene())
+    launch = (2.5, 0.7, 0.0)
+    ground = RobotSnapshot(Pose.from_xyz_yaw(2.5, 2.5, 0.0), mode="idle", armed=True, landed=True, battery=0.18)
+    ret = rules.vehicle_commands(ground, RunStatus(), s.workspace, launch)["return"]
+    assert not ret.enabled and ret.reason == "battery 18 %: below 25 %, land or Return"
+    air = rules.vehicle_commands(_hover(0.18), RunStatus(), s.workspace, launch)
+    assert air["return"].enabled and air["land"].enabled  # in the air the operator can always bring it down
+
+
 def test_one_warning_per_crossing(tmp_path: Path) -> None:
     s = Session(tmp_path / "s", start=START, autosave=False)
     s.spawn(Scene())
@@ -215,5 +226,23 @@ def test_the_vehicles_own_failsafe_lands_and_the_console_does_not_interfere(tmp_
         bodies = [n.body for n in st.battery_notices()]
         assert bodies and not any("land here: landing at" in b for b in bodies), bodies
         assert st.session.operator_state().execute_blocker is not None
+    finally:
+        st.close()
+
+
+def test_low_battery_blocks_resuming_the_operators_mission(tmp_path: Path) -> None:
+    st = Stack(tmp_path / "s", SimConfig(time_scale=2.0, **FAST))
+    try:
+        wait_for(lambda: st.session.robot is not None, what="first state")
+        assert st.session.add_goal((2.5, 6.5, 0.0)).ok
+        st.session.register()
+        st.runner.execute(st.session.build_mission())
+        wait_for(lambda: st.session.run.state == "running", what="the walk running")
+        st.runner.pause()
+        wait_for(lambda: st.session.run.state == "paused", what="paused")
+        assert st.session.operator_state().resume_blocker is None
+        st.robot.set_battery(0.20)
+        wait_for(lambda: st.session.operator_state().resume_blocker == "battery 20 %: below 25 %, land or Return",
+                 what="Resume off at low battery")
     finally:
         st.close()
