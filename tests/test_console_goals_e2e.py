@@ -168,9 +168,12 @@ def test_goals_go_through_objects_typed_goals_top_view_and_the_disconnected_bann
 
             # --- a typed goal ---------------------------------------------------------------------------
             typed = next(p for p in ((1.5, 2.5), (1.0, 2.5), (2.0, 2.25), (1.0, 1.5)) if _free(app, np.array([*p, 0.0])))
-            for name, value in zip("xyz", (str(typed[0]), str(typed[1]), "0")):
-                page.get_by_label(f"Goal {name} [m]").fill(value)
-            assert wait_until(lambda: tuple(map(float, app.views["paths"].typed_values())) == pytest.approx((*typed, 0.0)), 10)
+            want = (str(typed[0]), str(typed[1]), "0")
+            for i, name in enumerate("xyz"):  # one field at a time: each reaches the server before the next
+                label = page.get_by_text(f"Goal {name} [m]", exact=True)  # viser's text input has no label id
+                label.locator("xpath=ancestor::*[.//input][1]//input").first.fill(want[i])
+                assert wait_until(lambda: app.views["paths"].typed_values()[i] == want[i], 10), \
+                    app.views["paths"].typed_values()
             page.get_by_role("button", name="Add goal").click()
             assert wait_until(lambda: math.dist((session.route_snapshot().candidate_goal or (9, 9, 9))[:2], typed) < 0.2, 60), \
                 session.route_snapshot().candidate_goal
@@ -199,10 +202,18 @@ def test_goals_go_through_objects_typed_goals_top_view_and_the_disconnected_bann
                         and math.dist(cam.position, above) < 0.05)
 
             assert wait_until(looks_down, 30), cam.wxyz
-            page.get_by_role("button", name="Discard").click()
-            assert wait_until(lambda: session.route_snapshot().candidate_goal is None, 30)
+            assert session.route_snapshot().candidate_goal is None  # registered: no candidate to discard
+            discard = page.get_by_role("button", name="Discard", exact=True)
+            page.wait_for_function("el => el.disabled", arg=discard.element_handle(), timeout=30_000)  # off: nothing to act on
             spot = next(np.array([x, y, 0.0]) for x, y in ((1.0, 2.0), (4.0, 2.0), (1.0, 6.5), (2.5, 6.5), (4.0, 6.5))
                         if _free(app, np.array([x, y, 0.0])))
+
+            def camera_matches_canvas() -> bool:  # the client reported its camera for the canvas as it is now
+                box_ = page.locator("canvas").first.bounding_box()
+                return box_ is not None and cam.image_height > 0 and looks_down() and abs(
+                    box_["width"] / box_["height"] - cam.image_width / cam.image_height) < 0.01
+
+            assert wait_until(camera_matches_canvas, 30), (cam.image_width, cam.image_height)
             click(_project(cam, spot))
             assert wait_until(lambda: session.route_snapshot().candidate_goal is not None, 60)
             assert math.dist(session.route_snapshot().candidate_goal[:2], spot[:2]) < 0.2
