@@ -319,3 +319,17 @@ def test_start_inside_an_obstacle_is_refused() -> None:
     with pytest.raises(ValueError, match="walk_speed"):
         SimConfig(walk_speed=0)
     assert Workspace().contains(SEARCH_GOAL)
+
+
+def test_close_racing_a_background_connect_does_not_raise() -> None:
+    """The console connects its link in a background thread; a SIGTERM can close it between the loop
+    thread's creation and its start ('cannot join thread before it is started' ended the console with a
+    traceback on a loaded CI machine)."""
+    import threading as _threading
+
+    from console.link.sim import SimRobot
+
+    robot = SimRobot()
+    robot._thread = _threading.Thread(target=lambda: None)  # created by connect(), not started yet
+    robot.close()  # must not raise
+    assert not robot.connected

@@ -155,7 +155,7 @@ class MavlinkLink(RobotLink):
         self._cancel_run(RunStatus.ABORTED, "link closed")
         self.transport.close()
         self.streams.join()
-        if self._state_thread is not None:
+        if self._state_thread is not None and self._state_thread.is_alive():  # may not be started yet
             self._state_thread.join(timeout=2.0)
             self._state_thread = None
 

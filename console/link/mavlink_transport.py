@@ -177,7 +177,7 @@ class MavTransport:
         self.stop.set()
         self._hb_now.set()
         for t in self._threads:
-            if t is not threading.current_thread():
+            if t.is_alive() and t is not threading.current_thread():  # a close racing connect: maybe not started
                 t.join(timeout=2.0)
         self._threads = []
         conn, self.conn = self.conn, None
@@ -283,7 +283,7 @@ class StreamKeeper:
 
     def join(self) -> None:
         self._wake.set()
-        if self._thread is not None and self._thread is not threading.current_thread():
+        if self._thread is not None and self._thread.is_alive() and self._thread is not threading.current_thread():
             self._thread.join(timeout=3.0)
 
     def renew(self) -> None:

@@ -225,8 +225,9 @@ class SimRobot(RobotLink):
     def close(self) -> None:
         self._manual_connected = False
         self._stop.set()
-        if self._thread is not None:
-            self._thread.join(timeout=2.0)
+        t = self._thread
+        if t is not None and t.is_alive():  # a close racing a background connect: not started yet
+            t.join(timeout=2.0)
         with self._lock:
             if self._run is not None:
                 self._run.finish(RunStatus.ABORTED, "link closed")
