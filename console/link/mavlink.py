@@ -52,6 +52,10 @@ log = logging.getLogger(__name__)
 Vec3 = tuple[float, float, float]
 
 
+STILL_DWELL = 0.3
+"""How long [s] the vehicle must stay still over a spot before a landing starts there."""
+
+
 class MavlinkLink(RobotLink):
     """A robot reached over MAVLink (ArduPilot Copter firmware).
 
@@ -360,8 +364,21 @@ class MavlinkLink(RobotLink):
                 self.send_position_target((float(target[0]), float(target[1]), float(target[2])), yaw, comp)
             run.update(progress(max(0.0, dist0 - remaining(here))), index)
 
+        still_since: list[float] = []  # when the vehicle was first seen there and still (stop only)
+
         def reached(here: np.ndarray) -> bool:
-            return remaining(here) <= cfg.position_tolerance and (not stop or self._speed() < cfg.still_speed)
+            if remaining(here) > cfg.position_tolerance:
+                return False
+            if not stop:
+                return True
+            if self._speed() >= cfg.still_speed:
+                still_since.clear()
+                return False
+            # one slow sample is not a stop (a late sample on a busy link, the turn of an overshoot):
+            # still over the spot for STILL_DWELL [s] of samples in a row
+            if not still_since:
+                still_since.append(time.monotonic())
+            return time.monotonic() - still_since[0] >= STILL_DWELL
 
         what = f"{'walk' if ground else 'flight'} waypoint {index} ({target[0]:.2f}, {target[1]:.2f}, {target[2]:.2f})"
         timeout = self._motion_timeout(dist0, speed) + (cfg.settle_timeout if stop else 0.0)
@@ -468,8 +485,9 @@ class MavlinkLink(RobotLink):
         if float(np.linalg.norm((above - here)[:2])) > cfg.position_tolerance or self._speed() >= cfg.still_speed:
             self.set_mode(cfg.flight_mode, cancel)
             self._speeds(False, cancel)
-            z = float(here[2]) if here[2] > above[2] + cfg.altitude_tolerance else float(above[2])  # never descend first
-            self._go_to(run, cancel, np.array([above[0], above[1], z]), 0, False, lambda d: 0.2, stop=True)
+        # always confirmed stopped over the spot (STILL_DWELL of still samples), not on one sample
+        z = float(here[2]) if here[2] > above[2] + cfg.altitude_tolerance else float(above[2])  # never descend first
+        self._go_to(run, cancel, np.array([above[0], above[1], z]), 0, False, lambda d: 0.2, stop=True)
         self._land(run, cancel)
 
     def _land(self, run: SegmentRun, cancel: threading.Event) -> None:
