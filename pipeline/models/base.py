@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Literal, Protocol, Sequence, runtime_checkable
+from typing import Literal, Mapping, Protocol, Sequence, runtime_checkable
 
 import numpy as np
 
@@ -218,3 +218,10 @@ def check_prompts(prompts: Sequence[Prompt], who: str = "detector") -> list[Prom
             raise ModelError(f"{who}: prompts[{i}] has an empty text or class name: {p!r}")
         out.append((text, cls))
     return out
+
+
+def closed_vocabulary(prompts: Sequence[Prompt], label_map: Mapping[str, str], who: str = "detector") -> frozenset[str]:
+    """Class names of ``prompts`` that a closed-vocabulary detector can report: those some backend
+    label maps to through ``label_map`` (backend label -> catalog class); :class:`ModelError` on bad prompts."""
+    mapped = set(label_map.values())
+    return frozenset(c for _, c in check_prompts(prompts, who) if c in mapped)

@@ -20,7 +20,7 @@ from typing import Mapping, Sequence
 import cv2
 import numpy as np
 
-from pipeline.models.base import Detection, ModelError, Prompt, check_image, check_prompts
+from pipeline.models.base import Detection, ModelError, Prompt, check_image, closed_vocabulary
 from pipeline.models.nms import batched_nms
 from pipeline.models.session import IOSignature, TensorSpec, open_session, run
 from pipeline.models.yolox import read_labels
@@ -75,8 +75,7 @@ class SsdDetector:
 
     def vocabulary(self, prompts: Sequence[Prompt]) -> frozenset[str]:
         """Class names of ``prompts`` that some backend label maps to."""
-        mapped = set(self.label_map.values())
-        return frozenset(c for _, c in check_prompts(prompts, self.name) if c in mapped)
+        return closed_vocabulary(prompts, self.label_map, self.name)
 
     def detect(self, image_rgb: np.ndarray, prompts: Sequence[Prompt]) -> list[Detection]:
         """Detections of the prompts' classes, best first."""
