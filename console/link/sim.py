@@ -11,6 +11,11 @@ a ``--captures`` folder.
 
 Frames: world (z up) [m]; yaw about +z [rad]; the camera mount is in the robot body frame
 (x forward, y left, z up). States are published at ``SimConfig.rate`` Hz (>= 20).
+
+This module is :class:`SimRobot` (the link: connection, clock, faults, state stream, commands and
+the running of phases); its settings are in :mod:`~console.link.sim_config` (re-exported here),
+the segment -> phases plan in :mod:`~console.link.sim_motion` and the capture of renders / folder
+photos in :mod:`~console.link.sim_camera`.
 """
 
 from __future__ import annotations
@@ -19,7 +24,7 @@ import logging
 import math
 import threading
 import time
-from dataclasses import dataclass, field, replace
+from dataclasses import replace
 from pathlib import Path
 from typing import Sequence
 
@@ -27,108 +32,21 @@ import numpy as np
 
 from pipeline.geometry import CameraMount, Intrinsics, Pose, camera_pose_in_world
 from pipeline.scene import Scene
-from planner.grid import CellState, PlanningGrid, Workspace, build_grid
-from planner.mission import MissionSegment, SegmentKind
+from planner.grid import CellState, PlanningGrid, build_grid
+from planner.mission import MissionSegment
 
-from .base import (CaptureResult, GroundTruth, LinkError, Mode, RobotLink, RobotState, RunStatus,
-                   SegmentRun, VisibleObject)
+from .base import CaptureResult, LinkError, Mode, RobotLink, RobotState, RunStatus, SegmentRun
 from .captures import CapturesFolder
 from .render import SceneRenderer
+from .sim_camera import folder_capture, render_capture
+from .sim_config import DEFAULT_INTRINSICS, DEFAULT_MOUNT, SimConfig
+from .sim_motion import Phase, path_length, plan_segment, verb, wrap_angle
 from .world import DEFAULT_START, ROOM_MAX, ROOM_MIN, paper_room
 
 log = logging.getLogger(__name__)
 
-Vec3 = tuple[float, float, float]
-
-DEFAULT_INTRINSICS = Intrinsics(525.0, 525.0, 319.5, 239.5, 640, 480)
-"""The simulated camera: 640 x 480, 62 degrees horizontal field of view."""
-
-DEFAULT_MOUNT = CameraMount(position=(0.15, 0.0, 0.35), pitch=0.0)
-"""Camera on the simulated robot (robot body frame), looking straight ahead."""
-
 MESSAGES_KEPT = 5  # status messages carried by each state sample
 _STEP = 0.05  # [m] longest straight move checked against the occupancy at once
-
-
-@dataclass(frozen=True)
-class SimConfig:
-    """Kinematics and timing of the simulated robot (units in the names).
-
-    Attributes:
-        walk_speed: Walking speed [m/s].
-        fly_speed: Horizontal / straight-line flight speed [m/s].
-        climb_rate: Take-off climb rate [m/s].
-        descent_rate: Landing descent rate [m/s].
-        yaw_rate: Turn rate [rad/s] (the robot turns to face where it goes).
-        spool_time: Arming to lift-off [s].
-        settle_time: Touch-down to disarmed [s].
-        rate: State publication and integration rate [Hz].
-        time_scale: Simulated seconds per wall-clock second (> 1 runs faster).
-        start_tolerance: How far a segment's first waypoint may be from the robot [m].
-        drain_idle: Battery fraction used per second standing [1/s].
-        drain_walk: ... walking [1/s].
-        drain_fly: ... in the air [1/s].
-        workspace: Bounds the robot may not leave and the occupancy resolution.
-        link_loss_hold: During a link outage the robot holds (ends its segment) after this [s].
-        link_loss_land: ... and lands where it is after this [s] (its own failsafe).
-        battery_critical: On-board battery failsafe (like ArduPilot's ``BATT_CRT_VOLT`` with
-            ``BATT_FS_CRT_ACT`` = Land): at or below this charge [0..1] in the air the robot ends its
-            segment and lands where it is by itself (mode ``failsafe``, status message "battery
-            critical: landing"); 0 disables it. Tests reach it quickly with a high ``drain_*`` rate or
-            :meth:`SimRobot.set_battery`.
-    """
-
-    walk_speed: float = 0.4
-    fly_speed: float = 0.8
-    climb_rate: float = 0.5
-    descent_rate: float = 0.4
-    yaw_rate: float = math.radians(120.0)
-    spool_time: float = 1.0
-    settle_time: float = 0.5
-    rate: float = 50.0
-    time_scale: float = 1.0
-    start_tolerance: float = 0.3
-    drain_idle: float = 1e-5
-    drain_walk: float = 2e-4
-    drain_fly: float = 2e-3
-    workspace: Workspace = field(default_factory=Workspace)
-    link_loss_hold: float = 1.0
-    link_loss_land: float = 10.0
-    battery_critical: float = 0.10
-
-    def __post_init__(self) -> None:
-        for name in ("walk_speed", "fly_speed", "climb_rate", "descent_rate", "yaw_rate", "time_scale",
-                     "start_tolerance"):
-            v = getattr(self, name)
-            if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
-                raise ValueError(f"SimConfig.{name} must be a positive number, got {v!r}")
-        for name in ("spool_time", "settle_time", "drain_idle", "drain_walk", "drain_fly", "link_loss_hold",
-                     "link_loss_land"):
-            v = getattr(self, name)
-            if not (isinstance(v, (int, float)) and math.isfinite(v) and v >= 0):
-                raise ValueError(f"SimConfig.{name} must be >= 0, got {v!r}")
-        b = self.battery_critical
-        if not (isinstance(b, (int, float)) and math.isfinite(b) and 0.0 <= b < 1.0):
-            raise ValueError(f"SimConfig.battery_critical must be within 0..1, got {b!r}")
-        if not 20.0 <= self.rate <= 1000.0:
-            raise ValueError(f"SimConfig.rate must be within 20..1000 Hz, got {self.rate}")
-
-
-@dataclass
-class _Phase:
-    """One step of a segment: ``turn``, ``move``, ``spool``, ``climb``, ``descend`` or ``settle``."""
-
-    kind: str
-    mode: Mode
-    target: Vec3 | None = None
-    yaw: float | None = None
-    speed: float = 0.0
-    duration: float = 0.0
-    waypoint: int | None = None
-
-
-def _wrap(a: float) -> float:
-    return (a + math.pi) % (2 * math.pi) - math.pi
 
 
 class SimRobot(RobotLink):
@@ -174,7 +92,7 @@ class SimRobot(RobotLink):
         self._battery = 1.0
         self._sim_time = 0.0
         self._run: SegmentRun | None = None
-        self._phases: list[_Phase] = []
+        self._phases: list[Phase] = []
         self._progress_total = 0.0
         self._progress_done = 0.0
         self._link_down_until = -1.0
@@ -314,9 +232,9 @@ class SimRobot(RobotLink):
                 self._self_landing = True  # once per outage (a blocked descent is not retried)
                 log.info("simulated robot: link lost for %.1f s, landing by itself", outage)
                 self._say("CRITICAL", f"link lost for {outage:.0f} s: landing by itself")
-                self._phases = [_Phase("descend", Mode.LANDING, target=(float(self._pos[0]), float(self._pos[1]),
+                self._phases = [Phase("descend", Mode.LANDING, target=(float(self._pos[0]), float(self._pos[1]),
                                                                         self._floor), speed=self.config.descent_rate),
-                                _Phase("settle", Mode.LANDING, duration=self.config.settle_time)]
+                                Phase("settle", Mode.LANDING, duration=self.config.settle_time)]
             self._vel = (self._pos - before) / dt if dt > 0 else np.zeros(3)
             mode = self._mode()
             drain = (self.config.drain_fly if not self._landed or mode is Mode.TAKING_OFF
@@ -335,9 +253,9 @@ class SimRobot(RobotLink):
         log.info("simulated robot: battery %.0f %%, landing by itself", 100 * self._battery)
         self._say("CRITICAL", "battery critical: landing")
         self._finish(RunStatus.FAILED, f"battery critical ({100 * self._battery:.0f} %): landing", say=False)
-        self._phases = [_Phase("descend", Mode.FAILSAFE, target=(float(self._pos[0]), float(self._pos[1]),
+        self._phases = [Phase("descend", Mode.FAILSAFE, target=(float(self._pos[0]), float(self._pos[1]),
                                                                    self._floor), speed=self.config.descent_rate),
-                        _Phase("settle", Mode.LANDING, duration=self.config.settle_time)]
+                        Phase("settle", Mode.LANDING, duration=self.config.settle_time)]
 
     def set_battery(self, fraction: float) -> None:
         """Set the charge (for tests and demos) [0..1]; the failsafe acts on the next step."""
@@ -395,7 +313,7 @@ class SimRobot(RobotLink):
         if why is not None:
             raise LinkError(f"{what} is not free: {why}")
 
-    def _advance(self, ph: _Phase, dt: float) -> float:
+    def _advance(self, ph: Phase, dt: float) -> float:
         """Run ``ph`` for up to ``dt`` s; returns the unused time (phase popped when done)."""
         if ph.waypoint is not None and self._run is not None:
             self._run.update(self._progress(), ph.waypoint)
@@ -407,13 +325,13 @@ class SimRobot(RobotLink):
             return dt - used
         if ph.kind == "turn":
             assert ph.yaw is not None
-            err = _wrap(ph.yaw - self._yaw)
+            err = wrap_angle(ph.yaw - self._yaw)
             need = abs(err) / self.config.yaw_rate
             if need <= dt:
                 self._yaw = ph.yaw
                 self._phases.pop(0)
                 return dt - need
-            self._yaw = _wrap(self._yaw + math.copysign(self.config.yaw_rate * dt, err))
+            self._yaw = wrap_angle(self._yaw + math.copysign(self.config.yaw_rate * dt, err))
             return 0.0
         # straight motion: move, climb, descend
         assert ph.target is not None
@@ -430,7 +348,7 @@ class SimRobot(RobotLink):
                     self._landed = False
                 why = self._blocker(p)
                 if why is not None:
-                    self._fail(f"{self._verb(ph)} stopped: {why}")
+                    self._fail(f"{verb(ph)} stopped: {why}")
                     return 0.0
                 self._progress_done += float(np.linalg.norm(p - self._pos))
                 self._pos = p
@@ -440,12 +358,7 @@ class SimRobot(RobotLink):
             return dt - (dist / ph.speed if ph.speed > 0 else 0.0)
         return 0.0
 
-    @staticmethod
-    def _verb(ph: _Phase) -> str:
-        return {Mode.WALKING: "walking", Mode.FLYING: "flight", Mode.TAKING_OFF: "take-off",
-                Mode.LANDING: "landing"}.get(ph.mode, "motion")
-
-    def _end_phase(self, ph: _Phase) -> None:
+    def _end_phase(self, ph: Phase) -> None:
         self._phases.pop(0)
         if ph.kind == "spool":
             self._armed = True
@@ -480,7 +393,8 @@ class SimRobot(RobotLink):
                 raise LinkError(f"a {self._run.segment.kind.value} segment is still running: hold or abort it first")
             run = SegmentRun(segment)
             try:
-                phases = self._plan(segment)
+                phases = plan_segment(segment, self._pos, self._yaw, self._landed, self._floor, self.config,
+                                      self._blocker)
             except LinkError as exc:
                 run.finish(RunStatus.FAILED, str(exc))
                 self._say("ERROR", f"{segment.kind.value} refused: {exc}")
@@ -488,81 +402,10 @@ class SimRobot(RobotLink):
             self._run = run
             self._phases = phases
             self._progress_done = 0.0
-            self._progress_total = self._length(phases)
+            self._progress_total = path_length(self._pos, phases)
             if not phases:
                 self._finish(RunStatus.DONE)
             return run
-
-    def _length(self, phases: list[_Phase]) -> float:
-        total, p = 0.0, self._pos.copy()
-        for ph in phases:
-            if ph.target is not None:
-                q = np.asarray(ph.target)
-                total += float(np.linalg.norm(q - p))
-                p = q
-        return total
-
-    def _plan(self, seg: MissionSegment) -> list[_Phase]:
-        cfg = self.config
-        wps = [np.asarray(w, dtype=np.float64) for w in seg.waypoints]
-        here = self._pos.copy()
-        first = wps[0]
-        kind = seg.kind
-        if kind is SegmentKind.LAND and self._landed:
-            return []
-        gap = float(np.linalg.norm((first - here)[:2]))
-        if gap > cfg.start_tolerance:
-            raise LinkError(f"the {kind.value} segment starts at ({first[0]:.2f}, {first[1]:.2f}) but the robot "
-                            f"is at ({here[0]:.2f}, {here[1]:.2f}), {gap:.2f} m away")
-        if kind is SegmentKind.WALK:
-            wps = [np.array([w[0], w[1], self._floor]) for w in wps]
-        for i, w in enumerate(wps):
-            if kind is SegmentKind.TAKEOFF and i == 0:
-                w = np.array([w[0], w[1], self._floor])
-            why = None if kind is SegmentKind.LAND and i == 1 else self._blocker(w)
-            if why is not None:
-                raise LinkError(f"{kind.value} waypoint {i}: {why}")
-        phases: list[_Phase] = []
-        yaw = self._yaw
-
-        def go(points: list[np.ndarray], mode: Mode, speed: float, first_index: int) -> None:
-            nonlocal yaw
-            for i, w in enumerate(points):
-                d = w - (points[i - 1] if i else here)
-                if float(np.hypot(d[0], d[1])) > 0.05:
-                    heading = math.atan2(d[1], d[0])
-                    if abs(_wrap(heading - yaw)) > 1e-3:
-                        phases.append(_Phase("turn", mode, yaw=heading, waypoint=first_index + i))
-                        yaw = heading
-                if float(np.linalg.norm(d)) > 1e-6:
-                    phases.append(_Phase("move", mode, target=tuple(w), speed=speed, waypoint=first_index + i))
-
-        if kind is SegmentKind.WALK:
-            if not self._landed:
-                raise LinkError("cannot walk: the robot is in the air (land first)")
-            go(wps, Mode.WALKING, cfg.walk_speed, 0)
-        elif kind is SegmentKind.FLY:
-            if self._landed:
-                raise LinkError("cannot fly: the robot is on the ground (take off first)")
-            go(wps, Mode.FLYING, cfg.fly_speed, 0)
-        elif kind is SegmentKind.TAKEOFF:
-            top = wps[1]
-            if top[2] <= here[2] + 1e-6:
-                raise LinkError(f"take-off height {top[2]:.2f} m is not above the robot ({here[2]:.2f} m)")
-            if self._landed:
-                phases.append(_Phase("spool", Mode.TAKING_OFF, duration=cfg.spool_time, waypoint=1))
-            phases.append(_Phase("climb", Mode.TAKING_OFF, target=(here[0], here[1], float(top[2])),
-                                 speed=cfg.climb_rate, waypoint=1))
-            if float(np.hypot(*(top - here)[:2])) > 1e-6:
-                phases.append(_Phase("move", Mode.TAKING_OFF, target=tuple(top), speed=cfg.fly_speed, waypoint=1))
-        elif kind is SegmentKind.LAND:
-            above, spot = wps
-            if float(np.linalg.norm(above - here)) > 1e-6:
-                phases.append(_Phase("move", Mode.LANDING, target=tuple(above), speed=cfg.fly_speed, waypoint=0))
-            phases.append(_Phase("descend", Mode.LANDING, target=(float(spot[0]), float(spot[1]), self._floor),
-                                 speed=cfg.descent_rate, waypoint=1))
-            phases.append(_Phase("settle", Mode.LANDING, duration=cfg.settle_time, waypoint=1))
-        return phases
 
     def hold(self) -> None:
         self._require_link()
@@ -603,32 +446,16 @@ class SimRobot(RobotLink):
         self._require_link()
         with self._lock:
             robot = Pose.from_xyz_yaw(*map(float, self._pos), yaw=float(self._yaw))
-        camera = camera_pose_in_world(robot, self.mount)
         self._shots += 1
         if self.captures is not None:
-            photo = self.captures.next()
-            mount = self.mount if photo.mount is None else photo.mount  # the photo's own camera pose wins
-            if mount is not self.mount:
-                camera = camera_pose_in_world(robot, mount)
-            return CaptureResult(photo.image, photo.intrinsics, camera, robot, mount, time.time(),
-                                 "captures-folder", photo.name, photo.ground_truth)
+            return folder_capture(self.captures.next(), robot, self.mount)
+        camera = camera_pose_in_world(robot, self.mount)
         with self._render_lock:
             if self._renderer is None:
                 self._renderer = SceneRenderer(self.world, self.room)
             r = self._renderer.render(camera, self.intrinsics)
-        visible = []
-        H, W = r.instances.shape
-        ids, counts = np.unique(r.instances, return_counts=True)
-        for idx, count in zip(ids, counts):
-            if idx < 0 or count < self.min_visible_pixels:
-                continue
-            vs, us = np.nonzero(r.instances == idx)
-            box = (float(us.min()), float(vs.min()), float(us.max() + 1), float(vs.max() + 1))
-            cut = box[0] <= 0 or box[1] <= 0 or box[2] >= W or box[3] >= H
-            visible.append(VisibleObject(int(idx), r.object_ids[idx], r.labels[idx], box, int(count), cut))
-        truth = GroundTruth(self.world.objects, tuple(visible), r.depth, r.instances)
-        return CaptureResult(r.rgb, self.intrinsics, camera, robot, self.mount, time.time(), "sim-render",
-                             f"render-{self._shots:04d}", truth)
+        return render_capture(r, self.world, self.intrinsics, camera, robot, self.mount, f"render-{self._shots:04d}",
+                              self.min_visible_pixels)
 
 
 __all__ = ["SimRobot", "SimConfig", "DEFAULT_INTRINSICS", "DEFAULT_MOUNT"]
