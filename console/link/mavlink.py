@@ -1,4 +1,4 @@
-"""MAVLink link to an ArduPilot (Copter conventions) vehicle, with pymavlink: segment execution.
+"""MAVLink link to an ArduPilot (Copter conventions) vehicle, with pymavlink: the RobotLink itself.
 
 The link is split by concern:
 
@@ -11,8 +11,10 @@ The link is split by concern:
   reboot / reconnect detection;
 - :mod:`~console.link.mavlink_commands`: COMMAND_LONG / COMMAND_ACK handshakes, NACK reasons,
   modes, arming, take-off, speeds, position / velocity targets;
-- this module: :class:`MavlinkLink` (the :class:`~console.link.base.RobotLink`), its state
-  stream and the execution of mission segments.
+- :mod:`~console.link.mavlink_segments`: the execution of one mission segment (walk, take-off,
+  flight, landing) on the segment thread;
+- this module: :class:`MavlinkLink` (the :class:`~console.link.base.RobotLink`): connection,
+  state stream, segment runs (start, land here, hold / abort and the stop) and captures.
 
 Segments, in ArduPilot Copter terms: walking = ground-motion targets (:class:`GroundMotion`);
 take-off = wait (bounded) until the vehicle is ready, GUIDED, arm, ``MAV_CMD_NAV_TAKEOFF``;
@@ -39,21 +41,18 @@ from planner.mission import MissionSegment, SegmentKind
 
 from .base import CaptureResult, LinkError, LinkTimeout, RobotLink, RobotState, RunStatus, SegmentRun
 from .captures import CapturesFolder
-from .mavlink_commands import (POSITION_ONLY_MASK, POSITION_YAW_MASK, SPEED_CLIMB, SPEED_DESCENT, SPEED_GROUND,
-                               VELOCITY_ONLY_MASK, Commander, Stopped, copter_modes)
+from .mavlink_commands import (POSITION_ONLY_MASK, POSITION_YAW_MASK, VELOCITY_ONLY_MASK, Commander, Stopped,
+                               copter_modes)
 from .mavlink_config import GroundMotion, MavlinkConfig
-from .mavlink_state import landed, make_state
-from .mavlink_telemetry import LANDED_IN_AIR, LANDED_LANDING, LANDED_ON_GROUND, LANDED_TAKEOFF, Telemetry, Vehicle
+from .mavlink_segments import STILL_DWELL, SegmentExecutor
+from .mavlink_state import make_state
+from .mavlink_telemetry import LANDED_LANDING, LANDED_ON_GROUND, Telemetry
 from .mavlink_transport import MavTransport, StreamKeeper, parse_connection
 from .ned import NedFrame
 
 log = logging.getLogger(__name__)
 
 Vec3 = tuple[float, float, float]
-
-
-STILL_DWELL = 0.3
-"""How long [s] the vehicle must stay still over a spot before a landing starts there."""
 
 
 class MavlinkLink(RobotLink):
@@ -90,6 +89,7 @@ class MavlinkLink(RobotLink):
                                    config.retries, config.command_max_age, config.nack_window, self._counters)
         self.streams = StreamKeeper(config.message_rate, self.telemetry, self.transport, self.commander.command,
                                     self._target, stale_after=config.pose_timeout)
+        self.segments = SegmentExecutor(config, self.telemetry, self.commander)
         self._state_thread: threading.Thread | None = None
         self._run: SegmentRun | None = None
         self._run_cancel = threading.Event()
@@ -197,9 +197,6 @@ class MavlinkLink(RobotLink):
         pose = self.telemetry.pose_age()
         return max(hb, pose) if math.isfinite(pose) else hb
 
-    def _landed(self, v: Vehicle) -> bool:
-        return landed(v, self.config)
-
     def _make_state(self) -> RobotState | None:
         run = self._run
         kind = run.segment.kind if run is not None and not run.done else None
@@ -224,7 +221,7 @@ class MavlinkLink(RobotLink):
         segment running; nothing to do when already disarmed."""
         if not self.connected:
             raise LinkError("the MAVLink link is not connected")
-        if self._airborne():
+        if self.segments.airborne():
             raise LinkError("cannot disarm: the vehicle is in the air (land first)")
         run = self._run
         if run is not None and not run.done:
@@ -239,10 +236,6 @@ class MavlinkLink(RobotLink):
     def send_velocity_target(self, v_world: Vec3, yaw: float | None = None, component: int | None = None) -> None:
         self.commander.send_velocity_target(v_world, yaw, component)
 
-    def _airborne(self) -> bool:
-        with self.telemetry.lock:
-            return not self._landed(self.telemetry.v)
-
     # --- segments --------------------------------------------------------------------------------
     def run_segment(self, segment: MissionSegment) -> SegmentRun:
         if not self.connected:
@@ -256,258 +249,16 @@ class MavlinkLink(RobotLink):
             run = SegmentRun(segment)
             cancel = threading.Event()
             self._run, self._run_cancel = run, cancel
-            t = threading.Thread(target=self._execute, args=(run, cancel), name="mav-segment", daemon=True)
+            t = threading.Thread(target=self.segments.execute, args=(run, cancel), name="mav-segment", daemon=True)
             self._run_thread = t
             t.start()
         return run
-
-    def _execute(self, run: SegmentRun, cancel: threading.Event) -> None:
-        try:
-            {SegmentKind.WALK: self._do_walk, SegmentKind.TAKEOFF: self._do_takeoff, SegmentKind.FLY: self._do_fly,
-             SegmentKind.LAND: self._do_land}[run.segment.kind](run, cancel)
-            run.finish(RunStatus.DONE)
-        except Stopped:
-            pass  # hold()/abort() finishes the run
-        except LinkError as exc:
-            run.finish(RunStatus.FAILED, str(exc))
-        except Exception as exc:  # keep the console alive whatever happens
-            log.exception("segment execution failed")
-            run.finish(RunStatus.FAILED, f"internal error: {exc}")
-
-    def _pos(self) -> np.ndarray | None:
-        """The world position if valid and fresh, else None."""
-        with self.telemetry.lock:
-            v = self.telemetry.v
-            if v.pos_ned is None or time.monotonic() - v.pos_time > self.config.pose_timeout:
-                return None
-            return np.asarray(self.config.ned.to_world(v.pos_ned))
-
-    def _speed(self) -> float:
-        with self.telemetry.lock:
-            return float(np.linalg.norm(self.telemetry.v.vel_ned))
-
-    def _position(self, cancel: threading.Event | None = None) -> np.ndarray:
-        """The world position; waits up to ``pose_timeout`` for a valid one, else LinkError."""
-        deadline = time.monotonic() + self.config.pose_timeout
-        while True:
-            p = self._pos()
-            if p is not None:
-                return p
-            if time.monotonic() > deadline:
-                age = self.telemetry.pose_age()
-                raise LinkError("no valid position from the vehicle" + (
-                    f" for {age:.1f} s" if math.isfinite(age) else ": it has no local position estimate yet"))
-            if cancel is not None and cancel.wait(0.05):
-                raise Stopped()
-            elif cancel is None:
-                time.sleep(0.05)
-
-    def _motion_timeout(self, distance: float, speed: float) -> float:
-        t = distance / speed * self.config.timeout_factor + self.config.timeout_slack
-        if not math.isfinite(t):
-            raise LinkError(f"motion time-out not finite (distance {distance}, speed {speed})")
-        return t
-
-    def _wait(self, done: Callable[[np.ndarray], bool], timeout: float, what: str, cancel: threading.Event,
-              each: Callable[[np.ndarray], None] | None = None) -> None:
-        """Poll ``done(position)`` at the set-point rate (calling ``each(position)`` first) until true
-        or time-out; while the position is invalid or stale nothing is sent or decided."""
-        period = 1.0 / self.config.setpoint_rate
-        deadline = time.monotonic() + timeout
-        while True:
-            if cancel.is_set():
-                raise Stopped()
-            here = self._pos()
-            if here is not None:
-                if each is not None:
-                    each(here)
-                if done(here):
-                    return
-            if time.monotonic() > deadline:
-                raise LinkTimeout(f"{what} not reached within {timeout:.0f} s")
-            cancel.wait(period)
-
-    def _speeds(self, ground: bool, cancel: threading.Event) -> None:
-        """Command the configured speeds (MAV_CMD_DO_CHANGE_SPEED) for what comes next."""
-        cfg = self.config
-        if ground:
-            self.commander.change_speed(SPEED_GROUND, cfg.ground.speed, cancel, cfg.ground.target_component)
-            return
-        self.commander.change_speed(SPEED_GROUND, cfg.fly_speed, cancel)
-        self.commander.change_speed(SPEED_CLIMB, cfg.climb_rate, cancel)
-        self.commander.change_speed(SPEED_DESCENT, cfg.descent_rate, cancel)
-
-    def _go_to(self, run: SegmentRun, cancel: threading.Event, target: np.ndarray, index: int, ground: bool,
-               progress: Callable[[float], float], stop: bool = False) -> None:
-        """Stream targets to one waypoint until within tolerance (horizontal on the ground); with
-        ``stop`` also until the vehicle is still there."""
-        cfg = self.config
-        start = self._position(cancel)
-        dist0 = float(np.linalg.norm((target - start)[:2] if ground else target - start))
-        heading = math.atan2(target[1] - start[1], target[0] - start[0]) if dist0 > 0.05 else None
-        yaw = heading if cfg.face_travel else None
-        comp = cfg.ground.target_component if ground else None
-        speed = cfg.ground.speed if ground else cfg.fly_speed
-
-        def remaining(here: np.ndarray) -> float:
-            d = target - here
-            return float(np.linalg.norm(d[:2] if ground else d))
-
-        def send(here: np.ndarray) -> None:
-            if ground and cfg.ground.command == "velocity":
-                d = target - here
-                d[2] = 0.0
-                n = float(np.linalg.norm(d))
-                v = d / n * min(cfg.ground.speed, n * cfg.setpoint_rate) if n > 1e-6 else np.zeros(3)
-                self.send_velocity_target((float(v[0]), float(v[1]), 0.0), yaw, comp)
-            else:
-                self.send_position_target((float(target[0]), float(target[1]), float(target[2])), yaw, comp)
-            run.update(progress(max(0.0, dist0 - remaining(here))), index)
-
-        still_since: list[float] = []  # when the vehicle was first seen there and still (stop only)
-
-        def reached(here: np.ndarray) -> bool:
-            if remaining(here) > cfg.position_tolerance:
-                return False
-            if not stop:
-                return True
-            if self._speed() >= cfg.still_speed:
-                still_since.clear()
-                return False
-            # one slow sample is not a stop (a late sample on a busy link, the turn of an overshoot):
-            # still over the spot for STILL_DWELL [s] of samples in a row
-            if not still_since:
-                still_since.append(time.monotonic())
-            return time.monotonic() - still_since[0] >= STILL_DWELL
-
-        what = f"{'walk' if ground else 'flight'} waypoint {index} ({target[0]:.2f}, {target[1]:.2f}, {target[2]:.2f})"
-        timeout = self._motion_timeout(dist0, speed) + (cfg.settle_timeout if stop else 0.0)
-        self._wait(reached, timeout, what, cancel, send)
-        if ground and cfg.ground.command == "velocity":
-            self.send_velocity_target((0.0, 0.0, 0.0), None, comp)
-
-    def _follow(self, run: SegmentRun, cancel: threading.Event, points: list[np.ndarray], ground: bool,
-                first_index: int = 0, stop_at_end: bool = False) -> None:
-        legs = [self._position(cancel)] + points
-        lengths = [float(np.linalg.norm((legs[i + 1] - legs[i])[:2] if ground else legs[i + 1] - legs[i]))
-                   for i in range(len(points))]
-        total = sum(lengths) or 1.0
-        done = 0.0
-        for i, p in enumerate(points):
-            base = done
-            self._go_to(run, cancel, p, first_index + i, ground, lambda d, b=base: (b + d) / total,
-                        stop=stop_at_end and i == len(points) - 1)
-            done += lengths[i]
-            run.update(done / total, first_index + i + 1)
-
-    def _do_walk(self, run: SegmentRun, cancel: threading.Event) -> None:
-        g = self.config.ground
-        if self._airborne():
-            raise LinkError("cannot walk: the vehicle is in the air (land first)")
-        if g.mode is not None:
-            self.set_mode(g.mode, cancel)
-        if g.arm and not self.commander.armed():
-            self.arm(cancel)
-        self._speeds(True, cancel)
-        floor = float(self.config.floor)
-        pts = [np.array([w[0], w[1], floor]) for w in run.segment.waypoints]
-        here = self._position(cancel)
-        first = 1 if float(np.linalg.norm((pts[0] - here)[:2])) <= self.config.position_tolerance else 0
-        self._follow(run, cancel, pts[first:], ground=True, first_index=first)
-
-    def _wait_ready(self, cancel: threading.Event) -> None:
-        """Wait (up to ``ready_timeout``) until the vehicle has a position estimate and passes
-        its pre-arm checks."""
-        deadline = time.monotonic() + self.config.ready_timeout
-        while True:
-            why = self.telemetry.readiness(self.config.pose_timeout)
-            if not why:
-                return
-            if time.monotonic() > deadline:
-                raise LinkTimeout(f"the vehicle is not ready to take off after {self.config.ready_timeout:.0f} s: {why}")
-            if cancel.wait(0.1):
-                raise Stopped()
-
-    def _do_takeoff(self, run: SegmentRun, cancel: threading.Event) -> None:
-        cfg = self.config
-        spot, top = (np.asarray(w, dtype=np.float64) for w in run.segment.waypoints)
-        if self._airborne():
-            self.set_mode(cfg.flight_mode, cancel)
-            self._speeds(False, cancel)
-            self._follow(run, cancel, [top], ground=False, first_index=1)
-            return
-        self._wait_ready(cancel)
-        here = self._position(cancel)
-        gap = float(np.linalg.norm((spot - here)[:2]))
-        if gap > max(0.5, 3 * cfg.position_tolerance):
-            raise LinkError(f"take-off spot ({spot[0]:.2f}, {spot[1]:.2f}) is {gap:.2f} m from the vehicle")
-        self.set_mode(cfg.flight_mode, cancel)
-        if not self.commander.armed():
-            self.arm(cancel)
-        self._speeds(False, cancel)
-        floor_down = -cfg.ned.altitude(cfg.floor)
-
-        def climbing() -> bool:
-            with self.telemetry.lock:
-                v = self.telemetry.v
-                rising = v.pos_ned is not None and v.pos_ned[2] < floor_down - 0.05
-                return rising or v.landed_state in (LANDED_TAKEOFF, LANDED_IN_AIR)
-
-        self.commander.takeoff(cfg.ned.altitude(float(top[2])), climbing, cancel)
-        z0 = float(here[2])
-
-        def climbed(p: np.ndarray) -> bool:
-            z = float(p[2])
-            run.update(0.9 * max(0.0, z - z0) / max(1e-6, float(top[2]) - z0), 1)
-            return z >= float(top[2]) - cfg.altitude_tolerance
-
-        self._wait(climbed, self._motion_timeout(float(top[2]) - z0, cfg.climb_rate),
-                   f"take-off height {top[2]:.2f} m", cancel)
-        if float(np.linalg.norm((top - self._position(cancel))[:2])) > cfg.position_tolerance:
-            self._go_to(run, cancel, top, 1, False, lambda d: 0.95)
-
-    def _do_fly(self, run: SegmentRun, cancel: threading.Event) -> None:
-        if not self._airborne():
-            raise LinkError("cannot fly: the vehicle is on the ground (take off first)")
-        self.set_mode(self.config.flight_mode, cancel)
-        self._speeds(False, cancel)
-        pts = [np.asarray(w, dtype=np.float64) for w in run.segment.waypoints]
-        first = 1 if float(np.linalg.norm(pts[0] - self._position(cancel))) <= self.config.position_tolerance else 0
-        self._follow(run, cancel, pts[first:], ground=False, first_index=first)
-
-    def _do_land(self, run: SegmentRun, cancel: threading.Event) -> None:
-        """Above the spot, stopped there, then LAND until on the ground."""
-        cfg = self.config
-        if not self._airborne():
-            return
-        above, spot = (np.asarray(w, dtype=np.float64) for w in run.segment.waypoints)
-        here = self._position(cancel)
-        if float(np.linalg.norm((above - here)[:2])) > cfg.position_tolerance or self._speed() >= cfg.still_speed:
-            self.set_mode(cfg.flight_mode, cancel)
-            self._speeds(False, cancel)
-        # always confirmed stopped over the spot (STILL_DWELL of still samples), not on one sample
-        z = float(here[2]) if here[2] > above[2] + cfg.altitude_tolerance else float(above[2])  # never descend first
-        self._go_to(run, cancel, np.array([above[0], above[1], z]), 0, False, lambda d: 0.2, stop=True)
-        self._land(run, cancel)
-
-    def _land(self, run: SegmentRun, cancel: threading.Event) -> None:
-        cfg = self.config
-        self.set_mode(cfg.land_mode, cancel)
-        here = self._pos()
-        z0 = float(here[2]) if here is not None else cfg.floor + 1.0
-
-        def landed(p: np.ndarray) -> bool:
-            run.update(0.2 + 0.8 * max(0.0, z0 - float(p[2])) / max(1e-6, z0 - cfg.floor), 1)
-            return not self._airborne()
-
-        self._wait(landed, self._motion_timeout(max(0.0, z0 - cfg.floor), cfg.descent_rate), "landing (on ground)",
-                   cancel)
 
     def land_here(self, floor: float = 0.0) -> SegmentRun:
         """Land where the vehicle is now: straight to LAND (no flight to a remembered spot)."""
         if not self.connected:
             raise LinkError("the MAVLink link is not connected")
-        here = self._pos()
+        here = self.segments.pos()
         if here is None:
             st = self.latest_state()
             here = np.asarray(st.position if st is not None else self.config.ned.origin, dtype=np.float64)
@@ -522,8 +273,8 @@ class MavlinkLink(RobotLink):
 
             def go() -> None:
                 try:
-                    if self._airborne():
-                        self._land(run, cancel)
+                    if self.segments.airborne():
+                        self.segments.land(run, cancel)
                     run.finish(RunStatus.DONE)
                 except Stopped:
                     pass
@@ -573,21 +324,21 @@ class MavlinkLink(RobotLink):
         cfg = self.config
         deadline = time.monotonic() + cfg.settle_timeout
         while time.monotonic() < deadline:
-            if self.telemetry.heartbeat_age() > cfg.heartbeat_timeout or self._pos() is None:
+            if self.telemetry.heartbeat_age() > cfg.heartbeat_timeout or self.segments.pos() is None:
                 return "stop not confirmed: no valid telemetry"
-            if self._speed() < cfg.still_speed:
+            if self.segments.speed() < cfg.still_speed:
                 return ""
             time.sleep(0.02)
-        return f"still moving at {self._speed():.2f} m/s after {cfg.settle_timeout:.0f} s"
+        return f"still moving at {self.segments.speed():.2f} m/s after {cfg.settle_timeout:.0f} s"
 
     def _stop_here(self) -> None:
         if not self.connected:
             raise LinkError("the MAVLink link is not connected")
-        if self._airborne():
+        if self.segments.airborne():
             self.set_mode(self.config.hold_mode)
             return
         g = self.config.ground
-        here = self._pos()
+        here = self.segments.pos()
         if g.command == "velocity" or here is None:  # no valid position: stop without one
             self.send_velocity_target((0.0, 0.0, 0.0), None, g.target_component)
         else:
@@ -616,4 +367,5 @@ class MavlinkLink(RobotLink):
 
 
 __all__ = ["MavlinkLink", "MavlinkConfig", "GroundMotion", "NedFrame", "parse_connection", "copter_modes",
-           "POSITION_ONLY_MASK", "POSITION_YAW_MASK", "VELOCITY_ONLY_MASK", "LANDED_ON_GROUND", "LANDED_LANDING"]
+           "POSITION_ONLY_MASK", "POSITION_YAW_MASK", "VELOCITY_ONLY_MASK", "LANDED_ON_GROUND", "LANDED_LANDING",
+           "STILL_DWELL"]

@@ -1,0 +1,307 @@
+"""MAVLink segment execution: walk, take-off, flight and landing on an ArduPilot (Copter) vehicle.
+
+:class:`SegmentExecutor` runs one :class:`~planner.mission.MissionSegment` on the segment thread of
+:class:`~console.link.mavlink.MavlinkLink`, with the link's :class:`~console.link.mavlink_commands.Commander`
+(modes, arming, speeds, targets) and :class:`~console.link.mavlink_telemetry.Telemetry` (position,
+speed, landed state, readiness):
+
+- walking: ground-motion targets (:class:`~console.link.mavlink_config.GroundMotion`) to each waypoint;
+- take-off: wait (bounded) until the vehicle is ready, GUIDED, arm, ``MAV_CMD_NAV_TAKEOFF``, climb;
+- flight: the configured speeds (``MAV_CMD_DO_CHANGE_SPEED``), then ``SET_POSITION_TARGET_LOCAL_NED``
+  re-sent at the set-point rate until within tolerance;
+- landing: above the spot, *stopped* there (``STILL_DWELL`` of still samples), then LAND until
+  ``EXTENDED_SYS_STATE`` says on ground.
+
+Nothing is sent or decided from an invalid or stale position: the execution waits (the mission
+manager's failsafe decides). Positions are world frame (z up) [m], speeds [m/s], times [s].
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import threading
+import time
+from typing import Callable
+
+import numpy as np
+
+from planner.mission import SegmentKind
+
+from .base import LinkError, LinkTimeout, RunStatus, SegmentRun
+from .mavlink_commands import SPEED_CLIMB, SPEED_DESCENT, SPEED_GROUND, Commander, Stopped
+from .mavlink_config import MavlinkConfig
+from .mavlink_state import landed
+from .mavlink_telemetry import LANDED_IN_AIR, LANDED_TAKEOFF, Telemetry
+
+log = logging.getLogger(__name__)
+
+STILL_DWELL = 0.3
+"""How long [s] the vehicle must stay still over a spot before a landing starts there."""
+
+
+class SegmentExecutor:
+    """Runs mission segments on the vehicle (one at a time, on the caller's thread).
+
+    Args:
+        config: Frames, command set, speeds, tolerances and time-outs.
+        telemetry: The vehicle's validated telemetry (position, velocity, landed state).
+        commander: The command handshakes (modes, arming, speeds, targets).
+    """
+
+    def __init__(self, config: MavlinkConfig, telemetry: Telemetry, commander: Commander) -> None:
+        self.config = config
+        self.telemetry = telemetry
+        self.commander = commander
+
+    def airborne(self) -> bool:
+        """Whether the vehicle is in the air (from its landed state and height)."""
+        with self.telemetry.lock:
+            return not landed(self.telemetry.v, self.config)
+
+    def execute(self, run: SegmentRun, cancel: threading.Event) -> None:
+        """Run ``run``'s segment to its end (the segment thread's target): finishes the run DONE or
+        FAILED with the reason; a ``cancel`` (hold / abort) leaves finishing it to the caller."""
+        try:
+            {SegmentKind.WALK: self._do_walk, SegmentKind.TAKEOFF: self._do_takeoff, SegmentKind.FLY: self._do_fly,
+             SegmentKind.LAND: self._do_land}[run.segment.kind](run, cancel)
+            run.finish(RunStatus.DONE)
+        except Stopped:
+            pass  # hold()/abort() finishes the run
+        except LinkError as exc:
+            run.finish(RunStatus.FAILED, str(exc))
+        except Exception as exc:  # keep the console alive whatever happens
+            log.exception("segment execution failed")
+            run.finish(RunStatus.FAILED, f"internal error: {exc}")
+
+    def pos(self) -> np.ndarray | None:
+        """The world position if valid and fresh, else None."""
+        with self.telemetry.lock:
+            v = self.telemetry.v
+            if v.pos_ned is None or time.monotonic() - v.pos_time > self.config.pose_timeout:
+                return None
+            return np.asarray(self.config.ned.to_world(v.pos_ned))
+
+    def speed(self) -> float:
+        with self.telemetry.lock:
+            return float(np.linalg.norm(self.telemetry.v.vel_ned))
+
+    def position(self, cancel: threading.Event | None = None) -> np.ndarray:
+        """The world position; waits up to ``pose_timeout`` for a valid one, else LinkError."""
+        deadline = time.monotonic() + self.config.pose_timeout
+        while True:
+            p = self.pos()
+            if p is not None:
+                return p
+            if time.monotonic() > deadline:
+                age = self.telemetry.pose_age()
+                raise LinkError("no valid position from the vehicle" + (
+                    f" for {age:.1f} s" if math.isfinite(age) else ": it has no local position estimate yet"))
+            if cancel is not None and cancel.wait(0.05):
+                raise Stopped()
+            elif cancel is None:
+                time.sleep(0.05)
+
+    def _motion_timeout(self, distance: float, speed: float) -> float:
+        t = distance / speed * self.config.timeout_factor + self.config.timeout_slack
+        if not math.isfinite(t):
+            raise LinkError(f"motion time-out not finite (distance {distance}, speed {speed})")
+        return t
+
+    def _wait(self, done: Callable[[np.ndarray], bool], timeout: float, what: str, cancel: threading.Event,
+              each: Callable[[np.ndarray], None] | None = None) -> None:
+        """Poll ``done(position)`` at the set-point rate (calling ``each(position)`` first) until true
+        or time-out; while the position is invalid or stale nothing is sent or decided."""
+        period = 1.0 / self.config.setpoint_rate
+        deadline = time.monotonic() + timeout
+        while True:
+            if cancel.is_set():
+                raise Stopped()
+            here = self.pos()
+            if here is not None:
+                if each is not None:
+                    each(here)
+                if done(here):
+                    return
+            if time.monotonic() > deadline:
+                raise LinkTimeout(f"{what} not reached within {timeout:.0f} s")
+            cancel.wait(period)
+
+    def _speeds(self, ground: bool, cancel: threading.Event) -> None:
+        """Command the configured speeds (MAV_CMD_DO_CHANGE_SPEED) for what comes next."""
+        cfg = self.config
+        if ground:
+            self.commander.change_speed(SPEED_GROUND, cfg.ground.speed, cancel, cfg.ground.target_component)
+            return
+        self.commander.change_speed(SPEED_GROUND, cfg.fly_speed, cancel)
+        self.commander.change_speed(SPEED_CLIMB, cfg.climb_rate, cancel)
+        self.commander.change_speed(SPEED_DESCENT, cfg.descent_rate, cancel)
+
+    def _go_to(self, run: SegmentRun, cancel: threading.Event, target: np.ndarray, index: int, ground: bool,
+               progress: Callable[[float], float], stop: bool = False) -> None:
+        """Stream targets to one waypoint until within tolerance (horizontal on the ground); with
+        ``stop`` also until the vehicle is still there."""
+        cfg = self.config
+        start = self.position(cancel)
+        dist0 = float(np.linalg.norm((target - start)[:2] if ground else target - start))
+        heading = math.atan2(target[1] - start[1], target[0] - start[0]) if dist0 > 0.05 else None
+        yaw = heading if cfg.face_travel else None
+        comp = cfg.ground.target_component if ground else None
+        speed = cfg.ground.speed if ground else cfg.fly_speed
+
+        def remaining(here: np.ndarray) -> float:
+            d = target - here
+            return float(np.linalg.norm(d[:2] if ground else d))
+
+        def send(here: np.ndarray) -> None:
+            if ground and cfg.ground.command == "velocity":
+                d = target - here
+                d[2] = 0.0
+                n = float(np.linalg.norm(d))
+                v = d / n * min(cfg.ground.speed, n * cfg.setpoint_rate) if n > 1e-6 else np.zeros(3)
+                self.commander.send_velocity_target((float(v[0]), float(v[1]), 0.0), yaw, comp)
+            else:
+                self.commander.send_position_target((float(target[0]), float(target[1]), float(target[2])), yaw, comp)
+            run.update(progress(max(0.0, dist0 - remaining(here))), index)
+
+        still_since: list[float] = []  # when the vehicle was first seen there and still (stop only)
+
+        def reached(here: np.ndarray) -> bool:
+            if remaining(here) > cfg.position_tolerance:
+                return False
+            if not stop:
+                return True
+            if self.speed() >= cfg.still_speed:
+                still_since.clear()
+                return False
+            # one slow sample is not a stop (a late sample on a busy link, the turn of an overshoot):
+            # still over the spot for STILL_DWELL [s] of samples in a row
+            if not still_since:
+                still_since.append(time.monotonic())
+            return time.monotonic() - still_since[0] >= STILL_DWELL
+
+        what = f"{'walk' if ground else 'flight'} waypoint {index} ({target[0]:.2f}, {target[1]:.2f}, {target[2]:.2f})"
+        timeout = self._motion_timeout(dist0, speed) + (cfg.settle_timeout if stop else 0.0)
+        self._wait(reached, timeout, what, cancel, send)
+        if ground and cfg.ground.command == "velocity":
+            self.commander.send_velocity_target((0.0, 0.0, 0.0), None, comp)
+
+    def _follow(self, run: SegmentRun, cancel: threading.Event, points: list[np.ndarray], ground: bool,
+                first_index: int = 0, stop_at_end: bool = False) -> None:
+        legs = [self.position(cancel)] + points
+        lengths = [float(np.linalg.norm((legs[i + 1] - legs[i])[:2] if ground else legs[i + 1] - legs[i]))
+                   for i in range(len(points))]
+        total = sum(lengths) or 1.0
+        done = 0.0
+        for i, p in enumerate(points):
+            base = done
+            self._go_to(run, cancel, p, first_index + i, ground, lambda d, b=base: (b + d) / total,
+                        stop=stop_at_end and i == len(points) - 1)
+            done += lengths[i]
+            run.update(done / total, first_index + i + 1)
+
+    def _do_walk(self, run: SegmentRun, cancel: threading.Event) -> None:
+        g = self.config.ground
+        if self.airborne():
+            raise LinkError("cannot walk: the vehicle is in the air (land first)")
+        if g.mode is not None:
+            self.commander.set_mode(g.mode, cancel)
+        if g.arm and not self.commander.armed():
+            self.commander.arm(cancel)
+        self._speeds(True, cancel)
+        floor = float(self.config.floor)
+        pts = [np.array([w[0], w[1], floor]) for w in run.segment.waypoints]
+        here = self.position(cancel)
+        first = 1 if float(np.linalg.norm((pts[0] - here)[:2])) <= self.config.position_tolerance else 0
+        self._follow(run, cancel, pts[first:], ground=True, first_index=first)
+
+    def _wait_ready(self, cancel: threading.Event) -> None:
+        """Wait (up to ``ready_timeout``) until the vehicle has a position estimate and passes
+        its pre-arm checks."""
+        deadline = time.monotonic() + self.config.ready_timeout
+        while True:
+            why = self.telemetry.readiness(self.config.pose_timeout)
+            if not why:
+                return
+            if time.monotonic() > deadline:
+                raise LinkTimeout(f"the vehicle is not ready to take off after {self.config.ready_timeout:.0f} s: {why}")
+            if cancel.wait(0.1):
+                raise Stopped()
+
+    def _do_takeoff(self, run: SegmentRun, cancel: threading.Event) -> None:
+        cfg = self.config
+        spot, top = (np.asarray(w, dtype=np.float64) for w in run.segment.waypoints)
+        if self.airborne():
+            self.commander.set_mode(cfg.flight_mode, cancel)
+            self._speeds(False, cancel)
+            self._follow(run, cancel, [top], ground=False, first_index=1)
+            return
+        self._wait_ready(cancel)
+        here = self.position(cancel)
+        gap = float(np.linalg.norm((spot - here)[:2]))
+        if gap > max(0.5, 3 * cfg.position_tolerance):
+            raise LinkError(f"take-off spot ({spot[0]:.2f}, {spot[1]:.2f}) is {gap:.2f} m from the vehicle")
+        self.commander.set_mode(cfg.flight_mode, cancel)
+        if not self.commander.armed():
+            self.commander.arm(cancel)
+        self._speeds(False, cancel)
+        floor_down = -cfg.ned.altitude(cfg.floor)
+
+        def climbing() -> bool:
+            with self.telemetry.lock:
+                v = self.telemetry.v
+                rising = v.pos_ned is not None and v.pos_ned[2] < floor_down - 0.05
+                return rising or v.landed_state in (LANDED_TAKEOFF, LANDED_IN_AIR)
+
+        self.commander.takeoff(cfg.ned.altitude(float(top[2])), climbing, cancel)
+        z0 = float(here[2])
+
+        def climbed(p: np.ndarray) -> bool:
+            z = float(p[2])
+            run.update(0.9 * max(0.0, z - z0) / max(1e-6, float(top[2]) - z0), 1)
+            return z >= float(top[2]) - cfg.altitude_tolerance
+
+        self._wait(climbed, self._motion_timeout(float(top[2]) - z0, cfg.climb_rate),
+                   f"take-off height {top[2]:.2f} m", cancel)
+        if float(np.linalg.norm((top - self.position(cancel))[:2])) > cfg.position_tolerance:
+            self._go_to(run, cancel, top, 1, False, lambda d: 0.95)
+
+    def _do_fly(self, run: SegmentRun, cancel: threading.Event) -> None:
+        if not self.airborne():
+            raise LinkError("cannot fly: the vehicle is on the ground (take off first)")
+        self.commander.set_mode(self.config.flight_mode, cancel)
+        self._speeds(False, cancel)
+        pts = [np.asarray(w, dtype=np.float64) for w in run.segment.waypoints]
+        first = 1 if float(np.linalg.norm(pts[0] - self.position(cancel))) <= self.config.position_tolerance else 0
+        self._follow(run, cancel, pts[first:], ground=False, first_index=first)
+
+    def _do_land(self, run: SegmentRun, cancel: threading.Event) -> None:
+        """Above the spot, stopped there, then LAND until on the ground."""
+        cfg = self.config
+        if not self.airborne():
+            return
+        above, spot = (np.asarray(w, dtype=np.float64) for w in run.segment.waypoints)
+        here = self.position(cancel)
+        if float(np.linalg.norm((above - here)[:2])) > cfg.position_tolerance or self.speed() >= cfg.still_speed:
+            self.commander.set_mode(cfg.flight_mode, cancel)
+            self._speeds(False, cancel)
+        # always confirmed stopped over the spot (STILL_DWELL of still samples), not on one sample
+        z = float(here[2]) if here[2] > above[2] + cfg.altitude_tolerance else float(above[2])  # never descend first
+        self._go_to(run, cancel, np.array([above[0], above[1], z]), 0, False, lambda d: 0.2, stop=True)
+        self.land(run, cancel)
+
+    def land(self, run: SegmentRun, cancel: threading.Event) -> None:
+        cfg = self.config
+        self.commander.set_mode(cfg.land_mode, cancel)
+        here = self.pos()
+        z0 = float(here[2]) if here is not None else cfg.floor + 1.0
+
+        def landed(p: np.ndarray) -> bool:
+            run.update(0.2 + 0.8 * max(0.0, z0 - float(p[2])) / max(1e-6, z0 - cfg.floor), 1)
+            return not self.airborne()
+
+        self._wait(landed, self._motion_timeout(max(0.0, z0 - cfg.floor), cfg.descent_rate), "landing (on ground)",
+                   cancel)
+
+
+__all__ = ["SegmentExecutor", "STILL_DWELL"]
