@@ -4,6 +4,7 @@ by a 127.0.0.1 HTTP server; the real-conversion comparison runs only on a local 
 
 from __future__ import annotations
 
+import base64
 import dataclasses
 import hashlib
 import io
@@ -203,6 +204,10 @@ def sha(data: bytes) -> str:
     return hashlib.sha256(data).hexdigest()
 
 
+def integrity(data: bytes) -> str:
+    return "sha512-" + base64.b64encode(hashlib.sha512(data).digest()).decode()
+
+
 def fake_spec(url: str, tarball: bytes, payload: bytes, onnx_sha: str | None, convert: str = "raw_onnx",
               **changes: object) -> ModelSpec:
     """The real ``oidv4_ssd`` entry with the fake tarball's URL, sizes and checksums."""
@@ -210,10 +215,12 @@ def fake_spec(url: str, tarball: bytes, payload: bytes, onnx_sha: str | None, co
     start = len(LABELS)
     model, labels = real.files
     model = dataclasses.replace(model, url=url, sha256=onnx_sha, size=None, archive_sha256=sha(tarball),
-                                archive_size=len(tarball), byte_range=(start, start + len(payload)),
+                                archive_integrity=integrity(tarball), archive_size=len(tarball),
+                                byte_range=(start, start + len(payload)),
                                 source_sha256=sha(payload), convert=convert)
     labels = dataclasses.replace(labels, url=url, sha256=sha(LABELS), size=len(LABELS), archive_sha256=sha(tarball),
-                                 archive_size=len(tarball), byte_range=(0, start))
+                                 archive_integrity=integrity(tarball), archive_size=len(tarball),
+                                 byte_range=(0, start))
     model = dataclasses.replace(model, **{k: v for k, v in changes.items() if not k.startswith("labels_")})
     labels = dataclasses.replace(labels, **{k[7:]: v for k, v in changes.items() if k.startswith("labels_")})
     return dataclasses.replace(real, files=(model, labels))
@@ -265,6 +272,7 @@ def test_fetch_extracts_byte_ranges_converts_and_checks(fake: dict, server: File
 
 @pytest.mark.parametrize("change, error", [
     ({"archive_sha256": "f" * 64}, "checksum mismatch for objectron-0.4.1675468480.tgz"),
+    ({"archive_integrity": integrity(b"other")}, "integrity mismatch for objectron-0.4.1675468480.tgz: sha512-"),
     ({"source_sha256": "e" * 64}, rf"checksum mismatch for {MEMBER} bytes {len(LABELS)}\.\.\d+ in objectron"),
     ({"labels_sha256": "d" * 64}, rf"checksum mismatch for {MEMBER} bytes 0\.\.{len(LABELS)} in objectron"),
     ({"byte_range": (184, 10 ** 9)}, r"has \d+ bytes: no bytes 184\.\.1000000000"),
@@ -330,6 +338,9 @@ def test_registry_entry_describes_the_npm_source() -> None:
     assert model.source_sha256 == "d0a5255bf8c4f5a0bc4240741a76c41d5e939f7655078f945f50ab53a9375da6"
     assert labels.sha256 == "c148336a65f673013609a923fdcbdeec0f49df935045029c3746a3828a0e80e0"
     assert model.archive_sha256 == labels.archive_sha256 and len(model.archive_sha256 or "") == 64
+    # npm's own dist.integrity of that version (https://registry.npmjs.org/@mediapipe/objectron).
+    assert model.archive_integrity == labels.archive_integrity == (
+        "sha512-IoWuW0ojc9GaSW6UoDCIXgwjLSqTEcR5w8NYuGH+R5+q+nKzS7KOIGfY/eyx4DttReumb398W6+PpW0DQ2Rs/w==")
     assert model.convert == "tflite_ssd" and registry.converter("tflite_ssd")[0] is ssd_convert.convert_tflite
     assert "oidv4_ssd" not in {n for members in registry.MODEL_SETS.values() for n in members}
 

@@ -12,6 +12,8 @@ later fetches / ``verify`` check against it.
 
 from __future__ import annotations
 
+import base64
+import hashlib
 import http.client
 import json
 import os
@@ -251,6 +253,8 @@ def fetch(
                     download(file.url, archive, sha256=file.archive_sha256, size=file.archive_size,
                              progress=progress, timeout=timeout, desc=archive.name)
                     archives[file.url] = archive
+                    if file.archive_integrity:
+                        check_integrity(archive, file.archive_integrity)
                 part, actual, origin = _extract(archive, file, target, known, log)
                 staged.append((part, target))
             else:
@@ -287,6 +291,25 @@ def fetch(
 def _origin(known: str | None, file: ModelFile) -> str:
     """``FetchedFile.checksum`` of a file checked against ``known``."""
     return "recorded" if known is None else ("published" if known == file.sha256 else "matches record")
+
+
+def check_integrity(path: Path, integrity: str) -> None:
+    """Check a file against a Subresource-Integrity string (``sha512-<base64>``, as npm's ``dist.integrity``).
+
+    Raises:
+        ModelError: Unknown algorithm or a mismatch (the caller deletes the file).
+    """
+    algo, _, expected = integrity.partition("-")
+    if algo not in ("sha256", "sha384", "sha512") or not expected:
+        raise ModelError(f"unsupported integrity string {integrity!r} (expected sha512-<base64>)")
+    h = hashlib.new(algo)
+    with open(path, "rb") as f:
+        for block in iter(lambda: f.read(CHUNK), b""):
+            h.update(block)
+    actual = base64.b64encode(h.digest()).decode("ascii")
+    if actual != expected:
+        raise ModelError(f"integrity mismatch for {path.name}: {algo}-{actual}, npm publishes {integrity}; "
+                         "nothing was installed")
 
 
 def _remove_if_empty(folder: Path) -> None:

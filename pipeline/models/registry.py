@@ -55,6 +55,8 @@ class ModelFile:
         signature: I/O signature of an ONNX file, checked by :func:`verify`.
         archive_sha256: Checksum of the archive at ``url`` itself (checked before anything is extracted).
         archive_size: Size of that archive in bytes, when known.
+        archive_integrity: npm's Subresource-Integrity string of the archive (``dist.integrity``,
+            ``sha512-<base64>``), checked too, so the pin can be compared with the registry's metadata.
         byte_range: ``(start, end)`` byte offsets (end exclusive) of the file's bytes inside ``member``
             (an Emscripten packed-assets file holds several files back to back), else the whole member.
         source_sha256: With ``convert``: checksum of the extracted bytes before conversion.
@@ -70,6 +72,7 @@ class ModelFile:
     signature: IOSignature | None = None
     archive_sha256: str | None = None
     archive_size: int | None = None
+    archive_integrity: str | None = None
     byte_range: tuple[int, int] | None = None
     source_sha256: str | None = None
     convert: str | None = None
@@ -117,8 +120,9 @@ def converter(name: str) -> tuple[Any, Any]:
 
 _OBJECTRON = f"{_NPM}/@mediapipe/objectron/-/objectron-0.4.1675468480.tgz"
 _OBJECTRON_SHA256 = "fc3e37b326b05e8f596099c90b3e0931b05a56cd3160b9ac450b621794bac94c"
-"""sha256 of the npm tarball; npm publishes its sha512 (``dist.integrity`` sha512-IoWuW0oj...Rs/w==) and sha1
-(``dist.shasum`` e74d703539a64fa8e724282a9ba9ae34bff858d0), both checked against this download."""
+_OBJECTRON_INTEGRITY = "sha512-IoWuW0ojc9GaSW6UoDCIXgwjLSqTEcR5w8NYuGH+R5+q+nKzS7KOIGfY/eyx4DttReumb398W6+PpW0DQ2Rs/w=="
+"""npm's ``dist.integrity`` of the tarball (https://registry.npmjs.org/@mediapipe/objectron, version
+0.4.1675468480; its ``dist.shasum`` e74d703539a64fa8e724282a9ba9ae34bff858d0 matched the same download)."""
 _OBJECTRON_SIZE = 32667233
 _PACKED_ASSETS = "package/objectron_solution_packed_assets.data"
 
@@ -262,6 +266,7 @@ MODELS: dict[str, ModelSpec] = {
                     signature=ssd.SIGNATURE,
                     archive_sha256=_OBJECTRON_SHA256,
                     archive_size=_OBJECTRON_SIZE,
+                    archive_integrity=_OBJECTRON_INTEGRITY,
                     byte_range=(184, 9987912),
                     source_sha256="d0a5255bf8c4f5a0bc4240741a76c41d5e939f7655078f945f50ab53a9375da6",
                     convert="tflite_ssd",
@@ -274,6 +279,7 @@ MODELS: dict[str, ModelSpec] = {
                     member=_PACKED_ASSETS,
                     archive_sha256=_OBJECTRON_SHA256,
                     archive_size=_OBJECTRON_SIZE,
+                    archive_integrity=_OBJECTRON_INTEGRITY,
                     byte_range=(0, 184),
                 ),
             ),
