@@ -315,6 +315,8 @@ def run_bench(
     finally:
         if shared_mapper is not None:
             shared_mapper.close()
+    if getattr(models, "note", ""):  # e.g. the set's second detector is not fetched
+        model_names["note"] = str(models.note)  # type: ignore[union-attr]
     summary = _summarise(records, excluded)
     return BenchReport(str(dataset_dir), "gt-boxes" if gt_boxes else "detector", model_names, summary, records)
 
@@ -402,10 +404,15 @@ def _summarise(records: list[dict[str, Any]], excluded: dict[str, int]) -> dict[
             "error_rel": _stats([m["error_rel"] for m in ms]),
         }
     by_class: dict[str, Any] = {}
-    for cls in sorted({m["label"] for m in matches} | {c for r in records for c in r["missed"]}):
+    complete_recs = [r for r in records if not r["partial_annotation"]]
+    false_dets = [u["label"] for r in complete_recs for u in r["unmatched_detections"]]
+    for cls in sorted({m["label"] for m in matches} | {c for r in records for c in r["missed"]} | set(false_dets)):
         ms = [m for m in matches if m["label"] == cls]
         missed = sum(r["missed"].count(cls) for r in records)
-        by_class[cls] = {"gt": len(ms) + missed, "matched": len(ms), "error_rel": _stats([m["error_rel"] for m in ms])}
+        hits = sum(1 for r in complete_recs for m in r["matches"] if m["label"] == cls)
+        dets = hits + false_dets.count(cls)  # placed detections of the class on fully annotated samples
+        by_class[cls] = {"gt": len(ms) + missed, "matched": len(ms), "error_rel": _stats([m["error_rel"] for m in ms]),
+                         "detections_complete": dets, "precision": hits / dets if dets else None}
     timings = {k: _stats([r["timings"][k] for r in records if k in r["timings"]])["mean"] for k in STAGES}
     cues: dict[str, Any] = {}
     for name in CUES:
@@ -465,6 +472,7 @@ def format_report(report: BenchReport) -> str:
     lines = [
         f"dataset {report.dataset} ({s['images']} images, mode: {report.mode})",
         "models: " + ", ".join(f"{k}={v}" for k, v in report.models.items() if k in ("detector", "segmenter", "depth", "placement")),
+        *([f"note: {report.models['note']}"] if report.models.get("note") else []),
         "",
         f"detection ratio       {_fmt(s['detection_ratio'], '.1%')} of {s['gt_objects_catalog']} ground-truth objects of catalog classes",
         f"                      {_fmt(s['detection_ratio_vocabulary'], '.1%')} of {s['gt_objects_in_vocabulary']} in the detector's vocabulary",
@@ -496,7 +504,9 @@ def format_report(report: BenchReport) -> str:
         lines.append(f"cut by the border: {t['matched']} matched, 3D error relative mean "
                      f"{_fmt(t['error_rel']['mean'], '.1%')}, median {_fmt(t['error_rel']['median'], '.1%')}")
     lines.append("")
-    lines.append(f"{'class':16s} {'gt':>4s} {'found':>5s} {'rel med':>8s}")
+    lines.append(f"{'class':16s} {'gt':>4s} {'found':>5s} {'rel med':>8s}  precision (fully annotated images)")
     for cls, b in s["by_class"].items():
-        lines.append(f"{cls:16s} {b['gt']:4d} {b['matched']:5d} {_fmt(b['error_rel']['median'], '8.1%')}")
+        prec = (f"{_fmt(b.get('precision'), '.0%')} of {b['detections_complete']}" if b.get("detections_complete")
+                else "-")
+        lines.append(f"{cls:16s} {b['gt']:4d} {b['matched']:5d} {_fmt(b['error_rel']['median'], '8.1%')}  {prec}")
     return "\n".join(lines)

@@ -39,7 +39,7 @@ from pipeline.ranging import MappedObject, Ranger
 from pipeline.scene import Capture, Scene, SceneObject, Source
 from pipeline.segment_policy import mask_wanted
 from pipeline.stage_progress import StageCallback, stage_reporter
-from pipeline.tiled_detection import detect_tiled
+from pipeline.tiled_detection import detect_planned
 
 
 @dataclass
@@ -160,11 +160,8 @@ class Mapper:
         depth_future = (self._submit(depth_model.estimate, image, timings, "depth")
                         if depth_model is not None and cfg.parallel else None)
         report("detect")
-        tile_px = self._tile_px()
-        if tile_px is None:
-            detections = _timed(detector.detect, timings, "detect")(image, pairs)
-        else:
-            detections = _timed(detect_tiled, timings, "detect")(detector, image, pairs, tile_px)
+        # each detector (each member of a merged one) on the image and on tiles of its own input size
+        detections = _timed(detect_planned, timings, "detect")(detector, image, pairs, cfg.detect_tile_factor)
         detections = sorted(detections, key=lambda d: -d.score)
         if cfg.same_object_iou is not None and len(detections) > 1:
             keep = nms(np.array([d.box for d in detections]), np.array([d.score for d in detections]),
@@ -265,17 +262,6 @@ class Mapper:
         if self._pool is None:
             self._pool = ThreadPoolExecutor(max_workers=2, thread_name_prefix="mapper")
         return self._pool.submit(_timed(fn, timings, key), arg)
-
-    def _tile_px(self) -> int | None:
-        """Tile side [px] for tiled detection, ``None`` when the detector has no fixed input size."""
-        size = getattr(self.models.detector, "input_size", None)
-        if self.config.detect_tile_factor is None or not isinstance(size, (tuple, list)) or not size:
-            return None
-        try:
-            side = max(int(v) for v in size)
-        except (TypeError, ValueError):
-            return None
-        return max(64, int(round(self.config.detect_tile_factor * side)))
 
     def _scene_objects(
         self, objects: list[MappedObject], capture_id: str, mount: CameraMount, world_from_cam: Pose

@@ -260,11 +260,28 @@ def _with_second_detector(det: Any, name: str, model_dir: str | os.PathLike[str]
     return MergedDetector(det, second)
 
 
+SECOND_OWNS: dict[str, frozenset[str]] = {"oidv4_ssd": frozenset({"table"})}
+"""Classes both detectors know that the class-aware merge takes from the second one: Open Images'
+``Table`` is any table, COCO's ``dining table`` one kind (dev set: the SSD finds the ScanNet table at
+0.66, YOLOX-Nano neither table even at 0.1). Its classes COCO lacks (desk, cardboard_box) always come
+from it; every other shared class (person, car, chair, ...) from the set's own detector."""
+
+AUTO_SECOND: dict[str, str] = {"offline": "oidv4_ssd"}
+"""Second detector added to a set when its files are present (``--models offline`` = YOLOX-Nano and,
+when fetched, the Open Images SSD, merged class-aware); ``SET-NAME`` leaves it out."""
+
+
 def load_mapping_models(
     set_name: str, model_dir: str | os.PathLike[str] | None, catalog: Catalog, threads: int | None = None
 ) -> Any:
-    """The model set's bundle for the mapper; ``set+oidv4_ssd`` adds the Open Images SSD beside the set's
-    detector (both run, detections merged class-aware, :mod:`pipeline.models.ssd`).
+    """The model set's bundle for the mapper.
+
+    ``set_name`` is a set of :data:`pipeline.models.registry.MODEL_SETS`, optionally with a second
+    detector: ``offline+oidv4_ssd`` (required: missing files are an error) merges it class-aware
+    (:class:`pipeline.models.ssd.MergedDetector`, ``second_owns`` from :data:`SECOND_OWNS`),
+    ``offline+oidv4_ssd:union`` merges every class of both (the first merge, kept for comparison),
+    ``offline-oidv4_ssd`` leaves it out. A plain set adds its :data:`AUTO_SECOND` detector when the
+    files are present; when they are not, the bundle's ``note`` says so (the bench prints it).
 
     A closed-vocabulary detector's labels are mapped to catalog classes (``tvmonitor`` -> ``monitor``,
     ``diningtable`` -> ``table``; labels without a class are ignored). Threads: the mapper runs the
@@ -273,8 +290,27 @@ def load_mapping_models(
     core (``threads`` forces one count for all).
     """
     from pipeline.models.loader import ModelBundle, load_model, present_set_members
+    from pipeline.models.registry import locate
+    from pipeline.models.ssd import MergedDetector
 
-    set_name, _, extra = set_name.partition("+")
+    note = ""
+    if "+" in set_name:
+        set_name, _, extra = set_name.partition("+")
+        extra, _, policy = extra.partition(":")
+        if policy not in ("", "union"):
+            raise MapperError(f"--models ...+{extra}:{policy}: unknown merge (known: {extra}, {extra}:union)")
+    elif "-" in set_name:
+        set_name, _, left_out = set_name.partition("-")
+        if left_out != AUTO_SECOND.get(set_name):
+            raise MapperError(f"--models {set_name}-{left_out}: the set {set_name!r} adds no {left_out!r} "
+                              f"(it adds: {AUTO_SECOND.get(set_name) or 'nothing'})")
+        extra, policy = "", ""
+    else:
+        extra, policy = AUTO_SECOND.get(set_name, ""), ""
+        if extra and locate(extra, model_dir) is None:
+            note = (f"second detector {extra!r} not fetched: {set_name} runs without it "
+                    f"(morphonavi models fetch {extra})")
+            extra = ""
     names = present_set_members(set_name, model_dir)
     det_name, seg_name, depth_name = names
 
@@ -291,11 +327,15 @@ def load_mapping_models(
                 mapping[label] = entry.name
         det.label_map = mapping
     if extra:
-        det = _with_second_detector(det, extra, model_dir, catalog)
-    return ModelBundle(
+        merged = _with_second_detector(det, extra, model_dir, catalog)
+        if policy != "union":
+            merged = MergedDetector(*merged.members, policy="class_aware", second_owns=SECOND_OWNS.get(extra, ()))
+        det = merged
+    bundle = ModelBundle(
         detector=det,
         segmenter=load_model(seg_name, model_dir, threads=threads),
         depth=load_model(depth_name, model_dir, threads=n_threads(depth_name)),
         names=names,
     )
-
+    bundle.note = note  # type: ignore[attr-defined]
+    return bundle
