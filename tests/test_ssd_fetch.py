@@ -8,6 +8,7 @@ import base64
 import dataclasses
 import hashlib
 import io
+import json
 import math
 import os
 import sys
@@ -300,6 +301,32 @@ def test_other_conversion_bytes_are_kept_only_when_outputs_match(fake: dict, tmp
     assert recorded == {"oidv4_ssd.onnx": fake["onnx_sha"]}
     assert registry.expected_sha256(spec, spec.files[0], tmp_path / "ok" / "oidv4_ssd") == (
         fake["onnx_sha"], "recorded at conversion")
+    # A present file re-saved with other bytes but the same graph is kept (no download); a broken one is not.
+    import onnx
+
+    path = tmp_path / "ok" / "oidv4_ssd" / "oidv4_ssd.onnx"
+    resaved = onnx.load(str(path))
+    resaved.producer_name = "another converter"
+    onnx.save(resaved, str(path))
+    again, _ = fetch(spec, tmp_path / "ok", progress=False, log=messages.append)
+    assert (again.downloaded, again.checksum, again.sha256) == (False, "outputs match reference", sha(path.read_bytes()))
+    assert registry.recorded_checksums(path.parent) == {"oidv4_ssd.onnx": sha(path.read_bytes())}
+    path.write_bytes(b"not a model")
+    again, _ = fetch(spec, tmp_path / "ok", progress=False, log=messages.append)
+    assert again.downloaded and path.read_bytes() != b"not a model"
+    assert any("oidv4_ssd.onnx does not run" in m for m in messages)
+    monkeypatch.setitem(registry.MODELS, "oidv4_ssd", spec)
+    (result,) = verify(tmp_path / "ok", ["oidv4_ssd"])
+    assert result.ok, result.messages
+    # The reference conversion's own bytes are "published" even with a record of other bytes (which goes).
+    path.write_bytes(b"not a model")
+    (path.parent / CHECKSUMS_FILE).write_text(json.dumps({"oidv4_ssd.onnx": {"sha256": "b" * 64}}))
+    assert not verify(tmp_path / "ok", ["oidv4_ssd"])[0].ok
+    published = dataclasses.replace(spec, files=(dataclasses.replace(spec.files[0], sha256=fake["onnx_sha"]),
+                                                 spec.files[1]))
+    again, _ = fetch(published, tmp_path / "ok", progress=False, log=messages.append)
+    assert again.downloaded and again.checksum == "published" and again.sha256 == fake["onnx_sha"]
+    assert registry.recorded_checksums(path.parent) == {}
     # Outputs that differ from the reference are refused, and nothing stays.
     wrong = {k: tuple(v + 1.0 for v in vals) for k, vals in PROBE.items()}
     monkeypatch.setattr(sys.modules[__name__], "PROBE", wrong)

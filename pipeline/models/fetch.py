@@ -169,6 +169,7 @@ def _content_range_total(value: str) -> int | None:
 
 
 _FIRST_DOWNLOAD = "recorded on first download (no published checksum)"
+_CONVERTED = "converted with another toolchain; the outputs match the reference conversion's"
 
 
 def _record(folder: Path, file: ModelFile, sha: str, origin: str = _FIRST_DOWNLOAD) -> None:
@@ -184,6 +185,19 @@ def _record(folder: Path, file: ModelFile, sha: str, origin: str = _FIRST_DOWNLO
     tmp = path.with_name(path.name + ".tmp")
     tmp.write_text(json.dumps(data, indent=1, sort_keys=True) + "\n", encoding="utf-8")
     os.replace(tmp, path)
+
+
+def _forget(folder: Path, name: str) -> None:
+    path = folder / CHECKSUMS_FILE
+    try:
+        data = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, json.JSONDecodeError):
+        return
+    if isinstance(data, dict) and name in data:
+        del data[name]
+        tmp = path.with_name(path.name + ".tmp")
+        tmp.write_text(json.dumps(data, indent=1, sort_keys=True) + "\n", encoding="utf-8")
+        os.replace(tmp, path)
 
 
 def _known_sha256(file: ModelFile, folder: Path) -> str | None:
@@ -234,6 +248,8 @@ def fetch(
             known = _known_sha256(file, folder)
             if target.is_file() and not force:
                 actual = sha256_file(target)
+                if file.convert is not None and actual == file.sha256:
+                    known = actual  # the reference conversion's bytes, whatever an older record says
                 if known is None or actual == known:
                     origin = _origin(known, file)
                     if known is None:
@@ -242,6 +258,10 @@ def fetch(
                     else:
                         log(f"{spec.name}/{file.path}: present, sha256 ok")
                     results.append(FetchedFile(target, actual, False, origin))
+                    continue
+                if file.convert is not None and _outputs_match(file, target, log):
+                    _record(folder, file, actual, _CONVERTED)
+                    results.append(FetchedFile(target, actual, False, "outputs match reference"))
                     continue
                 log(f"{spec.name}/{file.path}: checksum differs from the expected one; downloading again")
                 target.unlink()
@@ -264,7 +284,7 @@ def fetch(
             if origin == "recorded":
                 records.append((file, actual, _FIRST_DOWNLOAD))
             elif origin == "outputs match reference":
-                records.append((file, actual, "converted here; the outputs match the reference conversion's"))
+                records.append((file, actual, _CONVERTED))
             results.append(FetchedFile(target, actual, True, origin))
         for part, target in staged:
             os.replace(part, target)
@@ -280,12 +300,27 @@ def fetch(
         raise
     for file, sha, origin in records:
         _record(folder, file, sha, origin)
+    for file, result in zip(spec.files, results):  # a converted file with the reference bytes: an old record goes
+        if file.convert is not None and result.checksum == "published":
+            _forget(folder, file.path)
         if origin.startswith("recorded"):
             log(f"{spec.name}/{file.path}: no published checksum; recorded sha256 {sha} in "
                 f"{folder / CHECKSUMS_FILE} (later verifies compare against it)")
     if archives:  # only on success: a failed archive download stays resumable
         shutil.rmtree(folder / ".download", ignore_errors=True)
     return results
+
+
+def _outputs_match(file: ModelFile, target: Path, log: Log) -> bool:
+    """A present converted file with other bytes: do its outputs match the reference conversion's?"""
+    try:
+        worst = converter(file.convert or "")[1](target)
+    except ModelError as exc:
+        log(f"{target.parent.name}/{target.name}: {exc}")
+        return False
+    log(f"{target.parent.name}/{target.name}: present; sha256 differs from the reference conversion's but the "
+        f"outputs match it (largest relative difference {worst:.1e}): kept, sha256 recorded")
+    return True
 
 
 def _origin(known: str | None, file: ModelFile) -> str:
@@ -377,6 +412,8 @@ def _extract(archive: Path, file: ModelFile, target: Path, sha256: str | None, l
             convert(raw, part)
             raw.unlink()
         actual = sha256_file(part)
+        if file.convert is not None and actual == file.sha256:
+            sha256, origin = actual, "published"  # the reference conversion's bytes, whatever an older record says
         if sha256 is not None and actual != sha256:
             if file.convert is None:
                 raise ModelError(f"checksum mismatch for {where} in {archive.name}: sha256 {actual}, expected "
