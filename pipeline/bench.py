@@ -406,13 +406,16 @@ def _summarise(records: list[dict[str, Any]], excluded: dict[str, int]) -> dict[
     by_class: dict[str, Any] = {}
     complete_recs = [r for r in records if not r["partial_annotation"]]
     false_dets = [u["label"] for r in complete_recs for u in r["unmatched_detections"]]
-    for cls in sorted({m["label"] for m in matches} | {c for r in records for c in r["missed"]} | set(false_dets)):
+    partial_unmatched = [u["label"] for r in records if r["partial_annotation"] for u in r["unmatched_detections"]]
+    for cls in sorted({m["label"] for m in matches} | {c for r in records for c in r["missed"]} | set(false_dets)
+                      | set(partial_unmatched)):
         ms = [m for m in matches if m["label"] == cls]
         missed = sum(r["missed"].count(cls) for r in records)
         hits = sum(1 for r in complete_recs for m in r["matches"] if m["label"] == cls)
         dets = hits + false_dets.count(cls)  # placed detections of the class on fully annotated samples
         by_class[cls] = {"gt": len(ms) + missed, "matched": len(ms), "error_rel": _stats([m["error_rel"] for m in ms]),
-                         "detections_complete": dets, "precision": hits / dets if dets else None}
+                         "detections_complete": dets, "precision": hits / dets if dets else None,
+                         "unmatched_partial": partial_unmatched.count(cls)}
     timings = {k: _stats([r["timings"][k] for r in records if k in r["timings"]])["mean"] for k in STAGES}
     cues: dict[str, Any] = {}
     for name in CUES:
@@ -504,9 +507,11 @@ def format_report(report: BenchReport) -> str:
         lines.append(f"cut by the border: {t['matched']} matched, 3D error relative mean "
                      f"{_fmt(t['error_rel']['mean'], '.1%')}, median {_fmt(t['error_rel']['median'], '.1%')}")
     lines.append("")
-    lines.append(f"{'class':16s} {'gt':>4s} {'found':>5s} {'rel med':>8s}  precision (fully annotated images)")
+    lines.append(f"{'class':16s} {'gt':>4s} {'found':>5s} {'rel med':>8s}  {'precision (fully annotated)':>27s}  "
+                 "unmatched on partially annotated")
     for cls, b in s["by_class"].items():
         prec = (f"{_fmt(b.get('precision'), '.0%')} of {b['detections_complete']}" if b.get("detections_complete")
                 else "-")
-        lines.append(f"{cls:16s} {b['gt']:4d} {b['matched']:5d} {_fmt(b['error_rel']['median'], '8.1%')}  {prec}")
+        lines.append(f"{cls:16s} {b['gt']:4d} {b['matched']:5d} {_fmt(b['error_rel']['median'], '8.1%')}  {prec:>27s}  "
+                     f"{b.get('unmatched_partial', 0)}")
     return "\n".join(lines)
