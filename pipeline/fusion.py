@@ -103,6 +103,14 @@ def _combine(ls: Sequence[float], ss: Sequence[float]) -> tuple[float, float]:
     return sum(wi * li for wi, li in zip(w, ls)) / tot, 1.0 / math.sqrt(tot)
 
 
+def combine_log(cues: Sequence[Cue]) -> tuple[float, float]:
+    """Inverse-variance mean and sigma of ``cues`` in log distance: ``(l, s)`` with the distance
+    ``exp(l)`` [m] and its relative sigma ``s``. ``cues`` must not be empty."""
+    if not cues:
+        raise FusionError("combine_log: no cues")
+    return _combine([math.log(c.distance) for c in cues], [c.rel_sigma for c in cues])
+
+
 def soft_upper_bound(mu: float, s: float, bound: float, bound_sigma: float) -> tuple[float, float]:
     """Mean and standard deviation of ``l ~ N(mu, s^2)`` given that ``l <= B`` with ``B ~ N(bound,
     bound_sigma^2)`` (all in log distance): the posterior ``N(l; mu, s^2) * Phi((bound - l) /
@@ -170,4 +178,4 @@ def fuse_cues(cues: Sequence[Cue], gate: float = DEFAULT_GATE,
     return Fused(d, d * s, tuple(c.name for c in kept), tuple(rejected), bounded, birge)
 
 
-__all__ = ["Cue", "DEFAULT_GATE", "Fused", "FusionError", "fuse_cues", "soft_upper_bound"]
+__all__ = ["Cue", "DEFAULT_GATE", "combine_log", "Fused", "FusionError", "fuse_cues", "soft_upper_bound"]

@@ -198,6 +198,8 @@ class Mapper:
         # --- distance and placement -----------------------------------------------------------------
         t0 = time.perf_counter()
         objects = [ranger.measure(det, m, image.shape, intrinsics, gravity, depth_map) for det, m in zip(detections, masks)]
+        if cfg.fusion == "sigma":
+            ranger.mark_hidden_contacts(objects)  # a nearer object may hide a floor contact
         scale = ranger.depth_scale(objects, depth_map)
         fusion_note, trusted = ranger.place_all(objects, scale, intrinsics)
         if ranger.yaw_from_depth(scale, trusted):

@@ -32,6 +32,8 @@ from pipeline.mapper_config import MIN_DEPTH_SIGMA, MapperConfig
 from pipeline.models.base import DepthMap, Detection
 from pipeline.orientation import length_axis_from_points
 from pipeline.placement import GeometricEstimate, centre_on_ray, geometric_estimate
+from pipeline.occlusion import bottom_occluders, contact_as_bound
+from pipeline.regions import box_mask, region_box, region_centre, region_width
 from pipeline.scene import Scene
 from pipeline.size_prior import half_depth_stats, size_prior_cue
 
@@ -73,6 +75,9 @@ class MappedObject:
     """The ``sigma`` fusion's result (distance, sigma, cues used and rejected)."""
     sigma_z: float | None = None
     """1-sigma [m] of the centre's optical-axis depth (``sigma`` fusion)."""
+    contact_hidden_by: str | None = None
+    """Label of the detection that may hide this box's bottom edge (its floor contact then only bounds
+    the distance, :mod:`pipeline.occlusion`)."""
 
     @property
     def geometric_z(self) -> float | None:
@@ -165,7 +170,7 @@ class Ranger:
             )
         if depth_map is not None:
             # without a mask, the middle half of the box: mostly the object, little background
-            depth_region = mask if mask is not None and mask.any() else _box_mask(box, h, w, shrink=0.25)
+            depth_region = mask if mask is not None and mask.any() else box_mask(box, h, w, shrink=0.25)
             obj.depth_value = mask_median_depth(depth_map.values, depth_region)
             if trunc.horizontal_cut and mask is not None and mask.any():
                 vals = np.asarray(depth_map.values, dtype=np.float64)[mask]
@@ -203,6 +208,16 @@ class Ranger:
             obj.cues.append(got[0])
             obj.ground_center = got[1]
 
+
+    @staticmethod
+    def mark_hidden_contacts(objects: list[MappedObject]) -> None:
+        """Note, for every object with a floor contact, a detection that may hide its bottom edge
+        (:func:`pipeline.occlusion.bottom_occluders`); the fusion then may take the contact for an
+        upper bound (:func:`pipeline.occlusion.contact_as_bound`)."""
+        live = [o for o in objects if not o.skipped]
+        for obj, occ in zip(live, bottom_occluders([o.detection.box for o in live])):
+            if occ is not None and obj.cue("ground_contact") is not None:
+                obj.contact_hidden_by = live[occ].detection.label
 
     def depth_scale(self, objects: list[MappedObject], depth_map: DepthMap | None) -> DepthScale | None:
         """Metric conversion of the depth map, fitted from the objects of known size when configured."""
@@ -283,7 +298,7 @@ class Ranger:
         if scale is not None and obj.depth_value is not None:
             z = scale.to_metric(obj.depth_value)
             surface = float(z) if math.isfinite(float(z)) and float(z) > 0 else None
-        uv = _region_centre(obj.mask, obj.detection.box)
+        uv = region_centre(obj.mask, obj.detection.box)
         if surface is not None:
             if obj.geometric is not None:
                 obj.depth_z = surface + obj.geometric.surface_offset
@@ -299,7 +314,14 @@ class Ranger:
                                 f"depth map, {depth_rel:.0%}, surface to centre +-{offset_sd:.2f} m"))
         # exact depth (a simulator's render) decides where it has a reading; the other cues are kept for the record
         use = [c for c in obj.cues if c.name == "depth"] if self.exact_depth and obj.depth_z is not None else obj.cues
-        fused = fuse_cues(use, self.config.gate_sigmas, obj.bound)
+        bound = obj.bound
+        if obj.contact_hidden_by is not None:
+            use, hidden = contact_as_bound(use)
+            if hidden is not None:
+                bound = hidden if bound is None or hidden[0] < bound[0] else bound
+            else:
+                obj.contact_hidden_by = None  # the contact agrees with the other cues: measured
+        fused = fuse_cues(use, self.config.gate_sigmas, bound)
         if fused is None:
             obj.skipped = "no distance: unknown size (or every dimension cut), no floor contact and no metric depth"
             return
@@ -361,7 +383,7 @@ class Ranger:
         if scale is not None and obj.depth_value is not None:
             z = scale.to_metric(obj.depth_value)
             surface = float(z) if math.isfinite(float(z)) and float(z) > 0 else None
-        uv = _region_centre(obj.mask, obj.detection.box)
+        uv = region_centre(obj.mask, obj.detection.box)
         if surface is not None:
             if obj.geometric is not None:
                 obj.depth_z = surface + obj.geometric.surface_offset
@@ -431,14 +453,14 @@ class Ranger:
         if obj.size_known:
             w, _, l = obj.size
             return (w + l) / math.pi
-        wpx = _region_width(obj.mask, obj.detection.box)
+        wpx = region_width(obj.mask, obj.detection.box)
         return 0.5 * wpx * surface_z / intr.fx
 
     @staticmethod
     def _measured_size(obj: MappedObject, surface_z: float, intr: Intrinsics) -> tuple[float, float, float]:
         """Size ``(w, h, l)`` [m] of an unknown-size object from its mask extent at ``surface_z``; the
         footprint is taken square (``l = w``)."""
-        x1, y1, x2, y2 = _region_box(obj.mask, obj.detection.box)
+        x1, y1, x2, y2 = region_box(obj.mask, obj.detection.box)
         wm = max((x2 - x1) * surface_z / intr.fx, 0.05)
         hm = max((y2 - y1) * surface_z / intr.fy, 0.05)
         return (wm, hm, wm)
@@ -459,39 +481,4 @@ def widen_sigmas(scene: Scene, rel: float) -> Scene:
     return replace(scene, objects=tuple(out))
 
 
-def _box_mask(box: Sequence[float], h: int, w: int, shrink: float = 0.0) -> np.ndarray:
-    """The box (optionally shrunk by ``shrink`` of its size on each side) as a bool HxW mask."""
-    x1, y1, x2, y2 = box
-    dx, dy = shrink * (x2 - x1), shrink * (y2 - y1)
-    c1, c2 = int(max(0, math.floor(x1 + dx))), int(min(w, math.ceil(x2 - dx)))
-    r1, r2 = int(max(0, math.floor(y1 + dy))), int(min(h, math.ceil(y2 - dy)))
-    m = np.zeros((h, w), dtype=bool)
-    if c2 > c1 and r2 > r1:
-        m[r1:r2, c1:c2] = True
-    return m
-
-
-def _region_box(mask: np.ndarray | None, box: Sequence[float]) -> tuple[float, float, float, float]:
-    if mask is not None and mask.any():
-        rows = np.flatnonzero(mask.any(axis=1))
-        cols = np.flatnonzero(mask.any(axis=0))
-        return (float(cols[0]), float(rows[0]), float(cols[-1] + 1), float(rows[-1] + 1))
-    x1, y1, x2, y2 = box
-    return (float(x1), float(y1), float(x2), float(y2))
-
-
-def _region_width(mask: np.ndarray | None, box: Sequence[float]) -> float:
-    x1, _, x2, _ = _region_box(mask, box)
-    return x2 - x1
-
-
-def _region_centre(mask: np.ndarray | None, box: Sequence[float]) -> tuple[float, float]:
-    """Pixel centre of the mask's bounding box (the detection box without a mask)."""
-    x1, y1, x2, y2 = _region_box(mask, box)
-    return ((x1 + x2) / 2, (y1 + y2) / 2)
-
-
-__all__ = [
-    "LIGHT_MODELS", "MAX_IMAGE_SIDE", "MapResult", "MappedObject", "Mapper", "MapperConfig", "MapperError", "as_rgb8",
-    "gravity_in_camera", "load_mapping_models", "prompts_from_words",
-]
+__all__ = ["EXACT_DEPTH_SIGMA", "MappedObject", "Ranger", "widen_sigmas"]

@@ -266,9 +266,9 @@ def test_minimal_catalog_loads(tmp_path: Path) -> None:
 
 
 def test_packaged_size_spreads_say_how_much_each_class_varies(catalog: Catalog) -> None:
-    """People and cars vary little in height, cabinets and tables a lot; table-top things are not on the floor."""
+    """People and cars vary little in height (cars: sedans to SUVs, 10 %), cabinets and tables a lot; table-top things are not on the floor."""
     sh = {name: catalog.get(name).spread[1] for name in ("person", "car", "cabinet", "table")}
-    assert sh["person"] < 0.1 and sh["car"] < 0.1 and sh["cabinet"] >= 0.4 and sh["table"] >= 0.15
+    assert sh["person"] < 0.1 and sh["car"] <= 0.1 and sh["cabinet"] >= 0.4 and sh["table"] >= 0.15
     assert all(0 < v <= 2 for e in catalog for v in e.spread)
     assert not catalog.get("monitor").on_floor and not catalog.get("cup").on_floor
     assert catalog.get("office_cabinet").on_floor and catalog.get("person").on_floor
