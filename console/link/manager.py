@@ -26,6 +26,11 @@ stay in charge:
 
 Positions are world frame (z up) [m]; times [s]. Listeners receive :class:`MissionEvent` on the
 manager's thread and must return quickly.
+
+This module is :class:`MissionManager` (control, the worker, geofence, events); the status /
+progress / event types are in :mod:`~console.link.manager_types` (re-exported here), where a
+segment starts again in :mod:`~console.link.manager_resume`, the failsafe, watchdog and position
+wait in :mod:`~console.link.manager_safety`.
 """
 
 from __future__ import annotations
@@ -34,8 +39,7 @@ import logging
 import math
 import threading
 import time
-from dataclasses import dataclass, replace
-from enum import Enum
+from dataclasses import replace
 from typing import Callable, Sequence
 
 import numpy as np
@@ -44,73 +48,14 @@ from planner.mission import Mission, MissionSegment, SegmentKind
 
 from ..wording import kind_text  # plain words (take-off), no UI
 from .base import LinkError, RobotLink, RobotState, RunStatus, SegmentRun
+from .manager_resume import original_index, segment_parts
 from .manager_safety import SafetyMixin
+from .manager_types import (EventListener, GeofenceError, MissionEvent, MissionProgress, MissionStateError,
+                            MissionStatus)
 
 log = logging.getLogger(__name__)
 
 Vec3 = tuple[float, float, float]
-
-
-class MissionStatus(str, Enum):
-    IDLE = "idle"
-    RUNNING = "running"
-    PAUSED = "paused"  # held by the operator or after a failure: resume() continues
-    FAILSAFE = "failsafe"  # link lost: holding / landing; resume() once the link is back
-    DONE = "done"
-    ABORTED = "aborted"
-
-    @property
-    def active(self) -> bool:
-        return self in (MissionStatus.RUNNING, MissionStatus.PAUSED, MissionStatus.FAILSAFE)
-
-
-class MissionStateError(RuntimeError):
-    """The operation does not fit the manager's state (resume with nothing paused ...)."""
-
-
-class GeofenceError(ValueError):
-    """A mission target lies outside the geofence; the message names segment and waypoint."""
-
-
-@dataclass(frozen=True)
-class MissionProgress:
-    """Where the mission stands.
-
-    Attributes:
-        status: Overall state.
-        mission_id: Id of the mission, ``None`` before the first.
-        segment: Index of the current (or interrupted) segment, ``None`` when none.
-        segments: Number of segments.
-        kind: Kind of the current segment.
-        control: ``ground`` (walking) or ``flight`` (take-off, flight, landing) or ``""``.
-        segment_fraction: Fraction of the current segment done, in [0, 1].
-        fraction: Fraction of the whole mission done (by path length), in [0, 1].
-        message: Latest human-readable status.
-    """
-
-    status: MissionStatus = MissionStatus.IDLE
-    mission_id: str | None = None
-    segment: int | None = None
-    segments: int = 0
-    kind: SegmentKind | None = None
-    control: str = ""
-    segment_fraction: float = 0.0
-    fraction: float = 0.0
-    message: str = ""
-
-
-@dataclass(frozen=True)
-class MissionEvent:
-    """Something the console should show: ``level`` is ``info``, ``warning``, ``error`` or
-    ``progress`` (throttled position updates)."""
-
-    time: float
-    level: str
-    message: str
-    progress: MissionProgress
-
-
-EventListener = Callable[[MissionEvent], None]
 
 
 def _control(kind: SegmentKind | None) -> str:
@@ -392,59 +337,9 @@ class MissionManager(SafetyMixin):
 
     def _prepare(self, seg: MissionSegment, next_wp: int | None,
                  fresh: bool = True) -> list[tuple[MissionSegment, bool]] | None:
-        """The segment (trimmed to ``waypoints[next_wp:]`` after an interruption) plus recovery
-        steps, or None if nothing is left. A ``fresh`` segment must start where the robot is."""
-        st = self._state()
-        here = np.asarray(st.position, dtype=np.float64)
+        """The segment's parts from where the robot is now (:func:`~console.link.manager_resume.segment_parts`)."""
         floor = float(self._mission.bounds_min[2]) if self._mission else 0.0
-        out: list[tuple[MissionSegment, bool]] = []
-        wps = [tuple(map(float, w)) for w in seg.waypoints]
-        k = seg.kind
-        if k in (SegmentKind.WALK, SegmentKind.FLY):
-            rest = wps[max(next_wp or 1, 1):]
-            if not rest:
-                return None
-            if k is SegmentKind.WALK and not st.landed:
-                out.append((MissionSegment(SegmentKind.LAND, (tuple(here), (here[0], here[1], floor))), False))
-                here = np.array([here[0], here[1], floor])
-            if k is SegmentKind.FLY and st.landed:
-                top = (here[0], here[1], rest[0][2])
-                out.append((MissionSegment(SegmentKind.TAKEOFF, ((here[0], here[1], floor), top)), False))
-                here = np.asarray(top)
-            start = (float(here[0]), float(here[1]), floor if k is SegmentKind.WALK else float(here[2]))
-            if fresh and math.dist(start[:2], wps[0][:2]) > self.resume_tolerance:
-                raise LinkError(f"the robot is {math.dist(start[:2], wps[0][:2]):.2f} m from the start of the "
-                                f"{k.value} segment")
-            out.append((MissionSegment(k, (start,) + tuple(rest)), True))
-        elif k is SegmentKind.TAKEOFF:
-            top = wps[1]
-            if fresh and st.landed and math.dist(here[:2], wps[0][:2]) > self.resume_tolerance:
-                raise LinkError(f"the robot is {math.dist(here[:2], wps[0][:2]):.2f} m from the take-off spot")
-            if st.landed:
-                out.append((MissionSegment(k, ((here[0], here[1], floor), (here[0], here[1], top[2]))), True))
-            else:
-                out.append((MissionSegment(SegmentKind.FLY, (tuple(here), top)), True))
-        else:  # LAND
-            above, spot = wps
-            if st.landed:
-                if math.dist(here[:2], spot[:2]) <= self.resume_tolerance:
-                    return None
-                top = (here[0], here[1], above[2])
-                out.append((MissionSegment(SegmentKind.TAKEOFF, ((here[0], here[1], floor), top)), False))
-                out.append((MissionSegment(SegmentKind.FLY, (top, above)), False))
-                out.append((MissionSegment(k, (above, spot)), True))
-            else:
-                out.append((MissionSegment(k, ((spot[0], spot[1], max(float(here[2]), spot[2])), spot)), True))
-        return out
-
-    @staticmethod
-    def _original_index(original: MissionSegment, part: MissionSegment, next_in_part: int) -> int | None:
-        """Index in the original segment of the waypoint a (trimmed) part was heading for."""
-        if part.kind is not original.kind or original.kind not in (SegmentKind.WALK, SegmentKind.FLY):
-            return None
-        # the part is (robot position,) + original.waypoints[k:]
-        k = len(original.waypoints) - (len(part.waypoints) - 1)
-        return max(1, k + max(next_in_part, 1) - 1)
+        return segment_parts(seg, self._state(), floor, next_wp, fresh, self.resume_tolerance)
 
     def _state(self) -> RobotState:
         st = self.link.latest_state()
@@ -488,17 +383,17 @@ class MissionManager(SafetyMixin):
             st = self._state()
             if st.link_epoch != epoch and not self._link_lost():
                 if is_main:
-                    self._resume_point = self._original_index(mission.segments[index], part, run.next_waypoint)
+                    self._resume_point = original_index(mission.segments[index], part, run.next_waypoint)
                 return self._stop_paused(run, f"{what}: the robot reconnected or rebooted ("
                                          + "; ".join((st.health,) + st.warnings) + ")")
             if time.monotonic() > deadline:
                 if is_main:
-                    self._resume_point = self._original_index(mission.segments[index], part, run.next_waypoint)
+                    self._resume_point = original_index(mission.segments[index], part, run.next_waypoint)
                 return self._stop_paused(run, f"{what} overran its deadline of {self._deadline(part):.0f} s "
                                               f"({part.length:.1f} m)")
             if self._link_lost():
                 if is_main:
-                    self._resume_point = self._original_index(mission.segments[index], part, run.next_waypoint)
+                    self._resume_point = original_index(mission.segments[index], part, run.next_waypoint)
                 self._failsafe()
                 return "failsafe"
             with self._cond:
@@ -526,7 +421,7 @@ class MissionManager(SafetyMixin):
             pausing, self._pausing = self._pausing, False
         frac = start_fraction + (1 - start_fraction) * run.progress
         if is_main:
-            self._resume_point = self._original_index(mission.segments[index], part, run.next_waypoint)
+            self._resume_point = original_index(mission.segments[index], part, run.next_waypoint)
         where = {"segment_fraction": frac, "fraction": (base + frac * length) / total} if is_main else {}
         if status is RunStatus.HELD or pausing:
             self._emit("info", f"mission paused during {what}", status=MissionStatus.PAUSED, **where)
