@@ -335,7 +335,8 @@ def test_other_conversion_bytes_are_kept_only_when_outputs_match(fake: dict, tmp
     assert_nothing_installed(tmp_path / "bad")
 
 
-def test_missing_converter_through_fetch_and_cli(fake: dict, tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+def test_missing_converter_through_fetch_and_cli(fake: dict, server: FileServer, tmp_path: Path,
+                                                 monkeypatch: pytest.MonkeyPatch) -> None:
     from pipeline.models import cli_support
 
     monkeypatch.setitem(sys.modules, "tflite2onnx", None)
@@ -343,13 +344,21 @@ def test_missing_converter_through_fetch_and_cli(fake: dict, tmp_path: Path, mon
     with pytest.raises(ModelError, match=r"needs tflite2onnx: pip install 'tflite2onnx==0\.4\.1'"):
         fetch(spec, tmp_path / "models", progress=False, log=lambda m: None)
     assert_nothing_installed(tmp_path / "models")
+    assert server.log == []  # found out before downloading anything
+    # Once the files are there, fetching again needs no converter.
+    monkeypatch.delitem(sys.modules, "tflite2onnx")
+    ready = fake_spec(fake["url"], fake["tarball"], fake["payload"], fake["onnx_sha"])
+    fetch(ready, tmp_path / "models", progress=False, log=lambda m: None)
+    monkeypatch.setitem(sys.modules, "tflite2onnx", None)
+    again = fetch(spec, tmp_path / "models", progress=False, log=lambda m: None)
+    assert [f.downloaded for f in again] == [False, False]
     monkeypatch.setitem(registry.MODELS, "oidv4_ssd", spec)
     lines: list[str] = []
-    assert cli_support.models_fetch(["oidv4_ssd"], tmp_path / "models", progress=False, log=lines.append) == 1
+    assert cli_support.models_fetch(["oidv4_ssd"], tmp_path / "cli", progress=False, log=lines.append) == 1
     errors = [m for m in lines if m.startswith("error:")]
     assert errors == ["error: oidv4_ssd: converting the TFLite model needs tflite2onnx: pip install "
                       "'tflite2onnx==0.4.1' (or: pip install 'morphonavi[ssd-convert]')"]
-    assert_nothing_installed(tmp_path / "models")
+    assert_nothing_installed(tmp_path / "cli")
 
 
 # -- registry, loader, mapper ----------------------------------------------------------------------------

@@ -35,6 +35,7 @@ from pipeline.models.registry import (
     converter,
     get_spec,
     recorded_checksums,
+    require_converter,
     resolve_models_dir,
     sha256_file,
 )
@@ -200,6 +201,12 @@ def _forget(folder: Path, name: str) -> None:
         os.replace(tmp, path)
 
 
+def _stale(file: ModelFile, folder: Path) -> bool:
+    """The file is missing or has neither the expected nor the published sha256."""
+    target = folder / file.path
+    return not target.is_file() or sha256_file(target) not in {_known_sha256(file, folder), file.sha256}
+
+
 def _known_sha256(file: ModelFile, folder: Path) -> str | None:
     """The checksum a file must have: a converted file's record first (see ``expected_sha256``)."""
     recorded = recorded_checksums(folder).get(file.path)
@@ -233,6 +240,8 @@ def fetch(
     if spec.remote:
         raise ModelError(f"model {spec.name!r} is a cloud API: there is nothing to fetch")
     folder = resolve_models_dir(dest) / spec.name
+    for conv in sorted({f.convert for f in spec.files if f.convert is not None and (force or _stale(f, folder))}):
+        require_converter(conv)  # before downloading anything: a missing converter names how to install it
     existed = folder.is_dir()
     try:
         folder.mkdir(parents=True, exist_ok=True)

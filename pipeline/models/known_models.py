@@ -81,19 +81,32 @@ class ModelSpec:
         return not self.files
 
 
-CONVERTERS: dict[str, tuple[str, str, str]] = {
-    "tflite_ssd": ("pipeline.models.ssd_convert", "convert_tflite", "check_outputs"),
+CONVERTERS: dict[str, tuple[str, ...]] = {
+    "tflite_ssd": ("pipeline.models.ssd_convert", "convert_tflite", "check_outputs", "require_tflite2onnx"),
 }
-"""Converter name -> (module, ``convert(source, target)``, ``check(target) -> max relative difference``)."""
+"""Converter name -> (module, ``convert(source, target)``, ``check(target) -> max relative difference``
+[, ``require()``: raises :class:`ModelError` naming what to install, called before anything is downloaded])."""
+
+
+def _converter_functions(name: str) -> list[Any]:
+    import importlib
+
+    module, *functions = CONVERTERS[name]
+    mod = importlib.import_module(module)
+    return [getattr(mod, f) for f in functions]
 
 
 def converter(name: str) -> tuple[Any, Any]:
     """``(convert, check)`` functions of converter ``name`` (imported on use)."""
-    import importlib
+    convert, check = _converter_functions(name)[:2]
+    return convert, check
 
-    module, convert_fn, check_fn = CONVERTERS[name]
-    mod = importlib.import_module(module)
-    return getattr(mod, convert_fn), getattr(mod, check_fn)
+
+def require_converter(name: str) -> None:
+    """Raise :class:`ModelError` (naming what to install) when converter ``name`` cannot run here."""
+    functions = _converter_functions(name)
+    if len(functions) > 2:
+        functions[2]()
 
 
 _OBJECTRON = f"{_NPM}/@mediapipe/objectron/-/objectron-0.4.1675468480.tgz"
@@ -283,4 +296,4 @@ MODEL_SETS: dict[str, tuple[str, str, str]] = {
 """Set name -> (detector, segmenter, depth estimator) model names."""
 
 
-__all__ = ["CONVERTERS", "MODELS", "MODEL_SETS", "ModelFile", "ModelSpec", "Role", "converter"]
+__all__ = ["CONVERTERS", "MODELS", "MODEL_SETS", "ModelFile", "ModelSpec", "Role", "converter", "require_converter"]

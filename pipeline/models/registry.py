@@ -38,6 +38,7 @@ from pipeline.models.known_models import (  # noqa: F401 - re-exported: the regi
     ModelSpec,
     Role,
     converter,
+    require_converter,
 )
 
 MODELS_ENV = "MORPHONAVI_MODELS"

@@ -221,6 +221,15 @@ def append_decode_head(model, anchors: np.ndarray | None = None,  # noqa: ANN001
     return model
 
 
+def require_tflite2onnx():  # noqa: ANN201 - the tflite2onnx module
+    """The ``tflite2onnx`` module; :class:`ModelError` naming how to install it when it is missing."""
+    try:
+        import tflite2onnx  # type: ignore[import-not-found]
+    except ImportError:
+        raise ModelError(f"converting the TFLite model needs tflite2onnx: {INSTALL_HINT}") from None
+    return tflite2onnx
+
+
 def convert_tflite(tflite: Path | str, target: Path | str) -> None:
     """TFLite SSD -> decoded ONNX at ``target`` (raw conversion with tflite2onnx, canonical order, head).
 
@@ -228,10 +237,7 @@ def convert_tflite(tflite: Path | str, target: Path | str) -> None:
         ModelError: tflite2onnx is not installed (naming how to install it) or the conversion fails;
             ``target`` is then not written.
     """
-    try:
-        import tflite2onnx  # type: ignore[import-not-found]
-    except ImportError:
-        raise ModelError(f"converting the TFLite model needs tflite2onnx: {INSTALL_HINT}") from None
+    tflite2onnx = require_tflite2onnx()
     import onnx
 
     with tempfile.TemporaryDirectory(prefix="ssd_convert_") as tmp:
@@ -324,4 +330,5 @@ def check_outputs(model_path: Path | str, reference: dict[str, tuple[float, ...]
 
 
 __all__ = ["AnchorOptions", "DecodeOptions", "INSTALL_HINT", "REFERENCE_PROBE", "append_decode_head", "canonicalise",
-           "check_outputs", "convert_tflite", "decode_numpy", "probe_input", "probe_stats", "ssd_anchors"]
+           "check_outputs", "convert_tflite", "decode_numpy", "probe_input", "probe_stats", "require_tflite2onnx",
+           "ssd_anchors"]
