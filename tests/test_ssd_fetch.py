@@ -182,7 +182,7 @@ def test_missing_tflite2onnx_is_one_clear_error(tmp_path: Path, monkeypatch: pyt
     with pytest.raises(ModelError) as err:
         ssd_convert.convert_tflite(tmp_path / "x.tflite", target)
     assert str(err.value) == ("converting the TFLite model needs tflite2onnx: pip install 'tflite2onnx==0.4.1' "
-                              "(or: pip install 'morphonavi[ssd-convert]')")
+                              "(in a checkout: pip install -e '.[ssd-convert]')")
     assert not target.exists()
 
 
@@ -357,7 +357,7 @@ def test_missing_converter_through_fetch_and_cli(fake: dict, server: FileServer,
     assert cli_support.models_fetch(["oidv4_ssd"], tmp_path / "cli", progress=False, log=lines.append) == 1
     errors = [m for m in lines if m.startswith("error:")]
     assert errors == ["error: oidv4_ssd: converting the TFLite model needs tflite2onnx: pip install "
-                      "'tflite2onnx==0.4.1' (or: pip install 'morphonavi[ssd-convert]')"]
+                      "'tflite2onnx==0.4.1' (in a checkout: pip install -e '.[ssd-convert]')"]
     assert_nothing_installed(tmp_path / "cli")
 
 
@@ -423,7 +423,7 @@ def _cached_tarball() -> Path | None:
 
 
 @pytest.mark.skipif(not (SHARED_SSD / "oidv4_ssd.onnx").is_file(), reason=f"{SHARED_SSD} not present")
-@pytest.mark.skipif(not _tflite2onnx_available(), reason="tflite2onnx not installed (pip install 'morphonavi[ssd-convert]')")
+@pytest.mark.skipif(not _tflite2onnx_available(), reason="tflite2onnx not installed (pip install 'tflite2onnx==0.4.1')")
 @pytest.mark.skipif(_cached_tarball() is None,
                     reason=f"set {CACHE_ENV} to a folder holding objectron-0.4.1675468480.tgz (npm pack); tests never download")
 def test_real_conversion_matches_the_shared_model(tmp_path: Path) -> None:

@@ -42,7 +42,7 @@ INPUT = "normalized_input_image_tensor"
 RAW_BOXES = "raw_outputs/box_encodings"
 RAW_SCORES = "raw_outputs/class_predictions"
 TFLITE2ONNX_VERSION = "0.4.1"
-INSTALL_HINT = f"pip install 'tflite2onnx=={TFLITE2ONNX_VERSION}' (or: pip install 'morphonavi[ssd-convert]')"
+INSTALL_HINT = f"pip install 'tflite2onnx=={TFLITE2ONNX_VERSION}' (in a checkout: pip install -e '.[ssd-convert]')"
 
 
 @dataclass(frozen=True)
