@@ -78,7 +78,8 @@ def tile_detections(
     return found
 
 
-def _merge(found: list[Detection], nms_iou: float) -> list[Detection]:
+def merge_detections(found: list[Detection], nms_iou: float) -> list[Detection]:
+    """``found`` after class-aware NMS at ``nms_iou`` (boxes [px] in one image frame), best first."""
     if not found:
         return []
     boxes = np.array([d.box for d in found])
@@ -107,7 +108,8 @@ def detect_tiled(
     found = list(detector.detect(image_rgb, prompts))
     if max(w, h) <= min_ratio * tile_px:
         return found
-    return _merge(found + tile_detections(detector, image_rgb, prompts, tile_px, overlap, edge_px, square), nms_iou)
+    tiles = tile_detections(detector, image_rgb, prompts, tile_px, overlap, edge_px, square)
+    return merge_detections(found + tiles, nms_iou)
 
 
 def member_tile_px(detector: object, tile_factor: float | None) -> int | None:
@@ -157,4 +159,4 @@ def detect_planned(
         found += tile_detections(detector, image_rgb, prompts, short, square=True)
     if tile_px is not None and max(w, h) > min_ratio * tile_px and tile_px < short:
         found += tile_detections(detector, image_rgb, prompts, tile_px, square=True)
-    return _merge(found, 0.5)
+    return merge_detections(found, 0.5)
