@@ -230,3 +230,14 @@ def test_real_merge_finds_the_scannet_table_from_the_ssd_and_the_kitti_person_fr
     people = [d for d in street if d.label == "person"]
     assert people and all(d.prompt == "person" for d in people)  # persons only from YOLOX (COCO label)
     assert box_iou(np.array([people[0].box]), np.array([[704, 153, 801, 309]]))[0, 0] > 0.6
+
+
+def test_models_list_says_whether_the_offline_set_runs_the_ssd(tmp_path: Path) -> None:
+    from pipeline.models.cli_support import models_list
+
+    assert "offline also runs oidv4_ssd beside its detector when present: missing, so offline runs without it" \
+        in models_list(tmp_path)
+    (tmp_path / "oidv4_ssd").mkdir()
+    for name in ("oidv4_ssd.onnx", "labelmap.txt"):
+        (tmp_path / "oidv4_ssd" / name).write_bytes(b"x")
+    assert models_list(tmp_path).endswith("offline also runs oidv4_ssd beside its detector when present: present")

@@ -26,7 +26,13 @@ def models_list(model_dir: Path | str | None = None) -> str:
     rows = [r.as_row() for r in list_models(model_dir)]
     dirs = ", ".join(str(d) for d in search_dirs(model_dir))
     sets = "; ".join(f"{s}: {', '.join(m)}" for s, m in MODEL_SETS.items())
-    return f"{format_table(rows)}\n\nsearched: {dirs}\nsets: {sets}"
+    from pipeline.mapper_config import AUTO_SECOND  # the mapper adds these detectors when present
+    from pipeline.models.registry import locate
+
+    extras = "".join(f"\n{s} also runs {n} beside its detector when present: "
+                     f"{'present' if locate(n, model_dir) else f'missing, so {s} runs without it'}"
+                     for s, n in AUTO_SECOND.items())
+    return f"{format_table(rows)}\n\nsearched: {dirs}\nsets: {sets}{extras}"
 
 
 def expand_names(names: Sequence[str]) -> list[str]:
