@@ -80,6 +80,9 @@ class MapperConfig:
             YOLOX-Nano) was the best measured trade-off on the dev set: tiles of 1.0 / 0.75 input
             sizes (more, upscaled tiles) found no more objects for 2-3x the time and more false
             detections, and horizontal-flip test-time augmentation none more for twice the time.
+            Each member of a merged detector is tiled to its own input size (its own ``tile_factor``
+            attribute wins), and a detector that stretches its input also runs on square windows
+            (:func:`pipeline.tiled_detection.detect_planned`).
         same_object_iou: Detections of different classes whose boxes overlap more than this (IoU) are
             taken for one object seen twice (a closed-vocabulary detector calls a bed "bed" and
             "sofa"): only the more confident stays. ``None``: keep both (class-aware NMS only).

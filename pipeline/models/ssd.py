@@ -53,9 +53,10 @@ class SsdDetector:
         nms_iou: IoU above which a lower-scoring box of the same class is dropped.
         threads: onnxruntime intra-op threads.
         tile_factor: Tiles of this many input sizes besides the whole image and its square windows
-            (:func:`pipeline.tiled_detection.detect_planned`); ``None`` (default): none. On the dev set
-            450 px tiles (1.5) found no object that the whole image and its windows missed, for 14
-            more unmatched detections of its own classes (desk, box, table; README, "Second detector").
+            (:func:`pipeline.tiled_detection.detect_planned`); ``None`` (default): none. On the dev set,
+            merged class-aware, 450 / 300 px tiles (1.5 / 1.0) found no object that the whole image
+            and its windows missed, for 15 / 4 more unmatched detections
+            (``bench/detector_variants.py``; README, "Second detector").
 
     Attributes:
         input_size: ``(300, 300)``, the model's input (h, w) [px].
