@@ -241,3 +241,20 @@ def test_models_list_says_whether_the_offline_set_runs_the_ssd(tmp_path: Path) -
     for name in ("oidv4_ssd.onnx", "labelmap.txt"):
         (tmp_path / "oidv4_ssd" / name).write_bytes(b"x")
     assert models_list(tmp_path).endswith("offline also runs oidv4_ssd beside its detector when present: present")
+
+
+def test_a_desk_and_a_table_on_one_object_are_one_detection() -> None:
+    from pipeline.models.ssd import SAME_OBJECT_LABELS, suppress_same_object
+
+    table = Detection((536, 468, 1221, 956), 0.66, "table", "Table")
+    desk = Detection((523, 455, 1241, 945), 0.53, "desk", "Desk")  # the SSD on the ScanNet table: IoU 0.91
+    other_desk = Detection((20, 250, 360, 850), 0.34, "desk", "Desk")  # elsewhere: stays
+    chair = Detection((530, 460, 1220, 950), 0.5, "chair", "Chair")  # not in a group: stays
+    out = suppress_same_object([desk, table, other_desk, chair], SAME_OBJECT_LABELS, 0.45)
+    assert out == [table, other_desk, chair]
+    assert suppress_same_object([desk, table], (), 0.45) == [desk, table]
+    # the merge applies the member's groups to what its whole image, windows and tiles found together
+    ssd = ssd_like([])
+    ssd.same_object_labels = SAME_OBJECT_LABELS  # type: ignore[attr-defined]
+    m = MergedDetector(yolox_like([]), ssd, policy="class_aware", second_owns={"table"})
+    assert m.merge([[], [desk, table]], PROMPTS) == [table]
