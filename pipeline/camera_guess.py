@@ -19,9 +19,10 @@ made (:attr:`AssumedCamera.how`) for the warning and the scene's capture record.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 from pipeline.geometry import CameraError, Intrinsics
+from pipeline.scene import Scene
 
 DEFAULT_HFOV_DEG = 65.0
 DEFAULT_SIGMA = 0.30
@@ -74,4 +75,19 @@ def assumed_camera(width: int, height: int, *, hfov_deg: float | None = None,
     return AssumedCamera(Intrinsics(f, f, width / 2.0, height / 2.0, int(width), int(height)), sigma, how)
 
 
-__all__ = ["AssumedCamera", "DEFAULT_HFOV_DEG", "assumed_camera"]
+def widen_sigmas(scene: Scene, rel: float) -> Scene:
+    """``scene`` with each object's ``sigma`` [m] widened by a relative error ``rel`` common to every
+    distance (an assumed focal length: ``sigma^2 + (rel * range)^2``, range from the camera-frame centre)."""
+    if not (math.isfinite(rel) and rel >= 0):
+        raise ValueError(f"rel: must be a finite number >= 0, got {rel!r}")
+    out = []
+    for o in scene.objects:
+        cam = o.source.positions.get("camera")
+        if o.sigma is None or cam is None:
+            out.append(o)
+            continue
+        out.append(replace(o, sigma=math.hypot(o.sigma, rel * math.dist(cam, (0.0, 0.0, 0.0)))))
+    return replace(scene, objects=tuple(out))
+
+
+__all__ = ["AssumedCamera", "DEFAULT_HFOV_DEG", "assumed_camera", "widen_sigmas"]

@@ -37,6 +37,7 @@ def _config(args: argparse.Namespace) -> MapperConfig:
         fit_depth=not (paper or args.no_depth_fit),
         yaw_from_depth=False if paper else None,
         ground_contact=not getattr(args, "no_ground_contact", False),
+        measure_height=not getattr(args, "no_measured_height", False),
     )
 
 
@@ -58,6 +59,9 @@ def _add_common(p: argparse.ArgumentParser) -> None:
                         "fixed: the --w-* weights (the paper)")
     g.add_argument("--no-ground-contact", action="store_true",
                    help="sigma fusion without ground-contact ranging (the floor under the box bottom)")
+    g.add_argument("--no-measured-height", action="store_true",
+                   help="keep the catalog height of floor-standing objects instead of the height their box's top "
+                        "edge shows at their distance")
     g.add_argument("--w-geometric", type=float, default=0.8, help="fusion weight of the size-prior distance (0.8)")
     g.add_argument("--w-depth", type=float, default=0.2, help="fusion weight of the depth-map distance (0.2)")
     g.add_argument("--no-uncut-sides", action="store_true",
@@ -117,7 +121,7 @@ def cmd_map(args: argparse.Namespace) -> int:
     from pipeline.geometry import CameraConfig, Pose, load_camera_toml, parse_pose
     from pipeline.image_io import read_image
     from pipeline.mapper import Mapper, prompts_from_words
-    from pipeline.ranging import widen_sigmas
+    from pipeline.camera_guess import widen_sigmas
 
     if args.camera is not None and args.fov is not None:
         raise _UserError("--fov is for photos without a camera file; the camera file's intrinsics are used")

@@ -116,6 +116,10 @@ class MapperConfig:
         ground_contact: ``sigma`` fusion: range floor-standing objects (catalog ``on_floor``) from where
             their box bottom meets the floor, when the camera height is known (camera above world
             z = 0 by more than 5 cm); see :mod:`pipeline.ground_contact`.
+        measure_height: ``sigma`` fusion with a known floor: a floor-standing object of known class gets
+            the height its box's top edge shows at its fused distance (fused with the catalog's; at
+            least the visible height when the border cuts the top), its bottom staying on the floor;
+            see :mod:`pipeline.measured_height`.
         sigma_pitch: 1-sigma of the camera's pitch knowledge [rad] (ground contact).
         sigma_camera_height: 1-sigma of the camera height [m] (ground contact).
         sigma_floor: 1-sigma of the floor under an object differing from the plane [m] (ground contact).
@@ -146,6 +150,7 @@ class MapperConfig:
     exact_depth: bool = False
     yaw_from_depth: bool | None = None
     ground_contact: bool = True
+    measure_height: bool = True
     sigma_pitch: float = 0.01
     sigma_camera_height: float = 0.03
     sigma_floor: float = 0.05

@@ -15,7 +15,7 @@ kept to reproduce the README's step table.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from typing import Sequence
 
 import numpy as np
@@ -29,12 +29,12 @@ from pipeline.fusion import Cue, Fused, fuse_cues
 from pipeline.geometry import Intrinsics
 from pipeline.ground_contact import GroundModel, border_bound, ground_contact_cue
 from pipeline.mapper_config import MIN_DEPTH_SIGMA, MapperConfig
+from pipeline.measured_height import HeightEstimate, estimate_height
 from pipeline.models.base import DepthMap, Detection
+from pipeline.occlusion import bottom_occluders, contact_as_bound
 from pipeline.orientation import length_axis_from_points
 from pipeline.placement import GeometricEstimate, centre_on_ray, geometric_estimate
-from pipeline.occlusion import bottom_occluders, contact_as_bound
 from pipeline.regions import box_mask, region_box, region_centre, region_width
-from pipeline.scene import Scene
 from pipeline.size_prior import half_depth_stats, size_prior_cue
 
 @dataclass
@@ -75,6 +75,8 @@ class MappedObject:
     """The ``sigma`` fusion's result (distance, sigma, cues used and rejected)."""
     sigma_z: float | None = None
     """1-sigma [m] of the centre's optical-axis depth (``sigma`` fusion)."""
+    height: HeightEstimate | None = None
+    """How the height of a floor-standing object of known class was set (:mod:`pipeline.measured_height`)."""
     contact_hidden_by: str | None = None
     """Label of the detection that may hide this box's bottom edge (its floor contact then only bounds
     the distance, :mod:`pipeline.occlusion`)."""
@@ -339,6 +341,25 @@ class Ranger:
         obj.center_cam = c * (fused.distance / float(c[2]))
         if not obj.size_known:
             obj.size = self._measured_size(obj, surface if surface is not None else fused.distance, intr)
+        elif obj.on_floor and self.ground is not None and self.config.measure_height:
+            self._measure_height(obj, fused, intr)
+
+    def _measure_height(self, obj: MappedObject, fused: Fused, intr: Intrinsics) -> None:
+        """The height of an object whose top the border cuts: at least what the photo shows
+        (:func:`pipeline.measured_height.estimate_height`), standing on the floor: its centre is put
+        half that height above the floor (the box-centre ray of a cut box says nothing about it)."""
+        assert self.ground is not None and obj.center_cam is not None
+        if not obj.truncation.top:
+            return
+        w, h, l = obj.size
+        est = estimate_height(obj.detection.box, True, obj.center_cam, fused.sigma / fused.distance,
+                              half_depth_stats(obj.size, obj.spread)[0], h, obj.spread[1], intr,
+                              self.ground.gravity_cam, self.ground.camera_height)
+        obj.height = est
+        obj.size = (w, est.height, l)
+        g = np.asarray(self.ground.gravity_cam, dtype=np.float64)
+        above_floor = self.ground.camera_height - float(obj.center_cam @ g)
+        obj.center_cam = obj.center_cam + (above_floor - 0.5 * est.height) * g
 
     def _fusion_weights(
         self, objects: list[MappedObject], scale: DepthScale | None
@@ -466,19 +487,4 @@ class Ranger:
         return (wm, hm, wm)
 
 
-def widen_sigmas(scene: Scene, rel: float) -> Scene:
-    """``scene`` with each object's ``sigma`` [m] widened by a relative error ``rel`` common to every
-    distance (an assumed focal length: ``sigma^2 + (rel * range)^2``, range from the camera-frame centre)."""
-    if not (math.isfinite(rel) and rel >= 0):
-        raise ValueError(f"rel: must be a finite number >= 0, got {rel!r}")
-    out = []
-    for o in scene.objects:
-        cam = o.source.positions.get("camera")
-        if o.sigma is None or cam is None:
-            out.append(o)
-            continue
-        out.append(replace(o, sigma=math.hypot(o.sigma, rel * math.dist(cam, (0.0, 0.0, 0.0)))))
-    return replace(scene, objects=tuple(out))
-
-
-__all__ = ["EXACT_DEPTH_SIGMA", "MappedObject", "Ranger", "widen_sigmas"]
+__all__ = ["EXACT_DEPTH_SIGMA", "MappedObject", "Ranger"]

@@ -93,7 +93,7 @@ def test_bench_samples_place_the_camera_at_their_height() -> None:
 
 
 def test_an_assumed_focal_length_widens_every_sigma() -> None:
-    from pipeline.ranging import widen_sigmas
+    from pipeline.camera_guess import widen_sigmas
 
     a = SceneObject("a", "chair", (1, 2, 0.4), (0.5, 0.8, 0.5), sigma=0.3,
                     source=Source(method="fused", positions={"camera": (0.0, 3.0, 4.0)}))
