@@ -342,6 +342,8 @@ def _score_sample(sample: BenchSample, result: MapResult, vocab: set[str], iou_t
             "cut": list(est.cut_sides),
             "cues": cues,
             "rejected": [n for n, _ in est.fusion.rejected] if est.fusion else [],
+            "contact_hidden_by": est.contact_hidden_by,  # set: the ground contact was only an upper bound
+            "height": None if est.height is None else {"how": est.height.how, "m": round(est.height.height, 3)},
             "sigma_z": None if est.sigma_z is None else round(est.sigma_z, 4),
             "error_z": round(abs(float(est.center_cam[2]) - gz), 4),  # type: ignore[index]
             "gt_center": [round(float(v), 3) for v in gt.center_cam],
@@ -449,6 +451,11 @@ def _summarise(records: list[dict[str, Any]], excluded: dict[str, int]) -> dict[
         "cues": cues,
         "truncated": {"matched": sum(1 for m in matches if m.get("cut")),
                       "error_rel": _stats([m["error_rel"] for m in matches if m.get("cut")])},
+        "hidden_contact": {"matched": sum(1 for m in matches if m.get("contact_hidden_by")),
+                           "error_rel": _stats([m["error_rel"] for m in matches if m.get("contact_hidden_by")])},
+        "raised_height": {"matched": sum(1 for m in matches if (m.get("height") or {}).get("how") == "at_least_visible"),
+                          "error_rel": _stats([m["error_rel"] for m in matches
+                                               if (m.get("height") or {}).get("how") == "at_least_visible"])},
         "by_source": by_source,
         "by_class": by_class,
     }
@@ -506,6 +513,11 @@ def format_report(report: BenchReport) -> str:
     if t:
         lines.append(f"cut by the border: {t['matched']} matched, 3D error relative mean "
                      f"{_fmt(t['error_rel']['mean'], '.1%')}, median {_fmt(t['error_rel']['median'], '.1%')}")
+    for key, what in (("hidden_contact", "floor contact maybe hidden by a nearer box, used as an upper bound"),
+                      ("raised_height", "top cut by the border, height raised to at least the visible")):
+        h = s.get(key)
+        if h and h["matched"]:
+            lines.append(f"{what}: {h['matched']} matched, 3D error relative mean {_fmt(h['error_rel']['mean'], '.1%')}")
     lines.append("")
     lines.append(f"{'class':16s} {'gt':>4s} {'found':>5s} {'rel med':>8s}  {'precision (fully annotated)':>27s}  "
                  "unmatched on partially annotated")

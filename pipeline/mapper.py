@@ -365,12 +365,16 @@ def _default_capture_id() -> str:
 
 def _distances(obj: MappedObject) -> dict[str, float | None]:
     """The object's distance estimates [m, optical-axis depth of the centre] for ``source.distances``:
-    size prior (``geometric``), depth map, fused, and with ``sigma`` fusion the floor contact."""
+    size prior (``geometric``), depth map, fused, and with ``sigma`` fusion the floor contact
+    (``ground_contact``, or ``ground_contact_bound`` when a nearer detection may hide it and it was used
+    only as an upper bound, :mod:`pipeline.occlusion`)."""
     out: dict[str, float | None] = {"geometric": obj.geometric_z, "depth": obj.depth_z,
                                     "fused": obj.fused.distance if obj.fused else None}
     if obj.fusion is not None:
         gc = obj.cue("ground_contact")
-        out["ground_contact"] = gc.distance if gc is not None else None
+        # a contact another detection may hide and that read too far was only an upper bound
+        key = "ground_contact" if obj.contact_hidden_by is None else "ground_contact_bound"
+        out[key] = gc.distance if gc is not None else None
     return out
 
 

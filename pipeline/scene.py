@@ -58,7 +58,9 @@ class Source:
         bbox: 2D box ``(x1, y1, x2, y2)`` [px] in the capture's image.
         mask_area: Segmentation mask area [px].
         distances: Distance estimates along the optical axis [m], keyed ``geometric``,
-            ``depth`` and ``fused`` (``None`` where not available).
+            ``depth`` and ``fused``, and ``ground_contact`` (the floor under the box bottom) or
+            ``ground_contact_bound`` (that reading taken only as an upper bound: a nearer object may
+            hide the contact) (``None`` where not available).
         positions: The object's centre in the other frames, keyed by frame name [m].
     """
 

@@ -232,3 +232,19 @@ def test_cli_mapping_options_reach_the_mapper_config() -> None:
     assert not config("--no-uncut-sides").handle_truncation
     assert config().ground_contact and not config("--no-ground-contact").ground_contact
     assert config("--fusion", "adaptive").fusion == "adaptive"
+
+
+@pytest.mark.skipif(not DEV.is_dir(), reason="needs ../shared/bench/dev")
+def test_dev_set_reports_hidden_contacts_and_raised_heights() -> None:
+    """SUN RGB-D 000001: the bed hides the nightstand's floor contact (its reading is only a bound);
+    ScanNet: cabinets cut by the top border are mapped at least as tall as they show."""
+    report = run_bench(DEV, None, Catalog.load(), gt_boxes=True, sources=["sunrgbd", "scannet"], progress=False)
+    matches = [m for r in report.samples for m in r["matches"]]
+    hidden = [m for m in matches if m["contact_hidden_by"]]
+    assert ("nightstand", "bed") in [(m["label"], m["contact_hidden_by"]) for m in hidden]
+    raised = [m for m in matches if m["height"] and m["height"]["how"] == "at_least_visible"]
+    assert raised and all(m["height"]["m"] > Catalog.load().get(m["label"]).size[1] for m in raised)  # type: ignore[index]
+    assert report.summary["hidden_contact"]["matched"] == len(hidden)
+    assert report.summary["raised_height"]["matched"] == len(raised)
+    text = format_report(report)
+    assert f"used as an upper bound: {len(hidden)} matched" in text and f"at least the visible: {len(raised)} matched" in text

@@ -102,6 +102,11 @@ def _map_nightstand(with_bed: bool):  # type: ignore[no-untyped-def]
     with Mapper(bundle, default_catalog(), MapperConfig()) as mapper:
         result = mapper.run(image, INTR, mount_from_gravity_height(G, H), Pose())
     (obj,) = [o for o in result.objects if o.detection.label == "nightstand"]
+    (scene_obj,) = [o for o in result.scene.objects if o.label == "nightstand"]
+    assert obj.cue("ground_contact") is not None
+    key = "ground_contact_bound" if obj.contact_hidden_by else "ground_contact"  # the scene says how it was used
+    assert scene_obj.source.distances[key] == pytest.approx(obj.cue("ground_contact").distance)  # type: ignore[union-attr]
+    assert ({"ground_contact", "ground_contact_bound"} - {key}).isdisjoint(scene_obj.source.distances)
     truth_z = z_ns + ns[2] / 2
     return obj, abs(obj.fusion.distance - truth_z) / truth_z  # type: ignore[union-attr]
 
