@@ -162,10 +162,11 @@ def describe(obj: SceneObject) -> str:
         f"| estimate | {e(s.method)} |",
         f"| source capture | {e(s.capture) if s.capture else 'none (manual)'} |",
     ]
-    for key in ("geometric", "ground_contact", "depth", "fused"):
+    names = {"ground_contact_bound": "ground contact (maybe hidden: at most)"}
+    for key in ("geometric", "ground_contact", "ground_contact_bound", "depth", "fused"):
         if key in s.distances:
             v = s.distances[key]
-            lines.append(f"| distance, {key.replace('_', ' ')} | {'—' if v is None else f'{v:.2f} m'} |")
+            lines.append(f"| distance, {names.get(key, key.replace('_', ' '))} | {'—' if v is None else f'{v:.2f} m'} |")
     if obj.sigma is not None:  # the mapper's fused 1-sigma along the camera ray (issue 11)
         lines.append(f"| sigma along the ray | {obj.sigma:.2f} m{' (cut: ' + ', '.join(obj.cut) + ')' if obj.cut else ''} |")
     if s.bbox is not None:

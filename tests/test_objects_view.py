@@ -99,3 +99,17 @@ def test_a_click_on_the_gizmo_moves_nothing_and_keeps_the_mission(server: viser.
     assert view.drop("desk", (3.5, 6.0), 0.3 + 2 * math.pi) is None  # a full turn is no turn
     assert view.drop("desk", (3.6, 6.0), 0.3) is not None  # 10 cm is a move
     assert session.grid is not grid
+
+
+def test_details_say_when_the_floor_contact_was_only_a_bound() -> None:
+    from console.objects_view import describe
+    from pipeline.scene import SceneObject, Source
+
+    def details(distances: dict[str, float]) -> str:
+        return describe(SceneObject(id="nightstand-1", label="nightstand", position=(1.0, 2.0, 0.3), size=(0.5, 0.6, 0.4),
+                                    source=Source(capture="c1", method="fused", distances=distances)))
+
+    hidden = details({"geometric": 5.1, "ground_contact_bound": 8.58, "fused": 5.2})
+    assert "| distance, ground contact (maybe hidden: at most) | 8.58 m |" in hidden
+    seen = details({"geometric": 5.1, "ground_contact": 5.0, "fused": 5.05})
+    assert "| distance, ground contact | 5.00 m |" in seen and "maybe hidden" not in seen
