@@ -354,7 +354,7 @@ class OfflineModels:
         from pipeline.models.base import ModelError
 
         with self._lock:
-            progress(0.0, "loading YOLOX-Nano, MobileSAM and FastDepth")
+            progress(0.0, f"loading {offline_models_label(self.model_dir)}")
             bundle = self._load()
             blank = np.full((480, 640, 3), 127, np.uint8)
             try:
@@ -401,4 +401,12 @@ def choose_perceiver(link: Any, model_dir: Path | None) -> Perceiver:
     if missing:
         log.warning("offline models %s missing in %s: Capture & map will fail until they are fetched",
                     ", ".join(missing), where)
-    return MapperPerceiver(f"offline models (YOLOX-Nano, MobileSAM, FastDepth) from {where}", OfflineModels(model_dir))
+    return MapperPerceiver(f"offline models ({offline_models_label(model_dir)}) from {where}", OfflineModels(model_dir))
+
+
+def offline_models_label(model_dir: Path | None) -> str:
+    """What the offline set runs here: YOLOX-Nano, with the Open Images SSD beside it when fetched."""
+    from pipeline.models.registry import locate
+
+    second = " + Open Images SSD" if locate("oidv4_ssd", model_dir) is not None else ""
+    return f"YOLOX-Nano{second}, MobileSAM, FastDepth"

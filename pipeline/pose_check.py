@@ -68,8 +68,10 @@ def floor_check(scene: Scene, floor_z: float = 0.0, *, under_limit: float = UNDE
 
     The photo's *ground level* is the lower quartile of its known-size objects' box bottoms (the
     lowest objects of a room stand on the floor; single objects cut by the image border or hidden
-    behind others land off it by up to ~0.2 m even with the right pose, so one object proves
-    nothing); with fewer than :data:`FEW` objects it is the lowest bottom, judged with 1.5x the limits.
+    behind others land off it by up to ~0.2 m even with the right pose, and a misdetection of the
+    wrong class (a 1.8 m "refrigerator" on a small purple toy) lands wherever its wrong size puts it,
+    so one object proves nothing); with fewer than :data:`FEW` objects it is the second lowest bottom
+    (a photo of one object is not judged), with 1.5x the limits.
     Floating is judged only on objects the image border does not cut and that stand on no other
     object of the photo, so a photo from the air of the upper boxes of a stack is not flagged.
 
@@ -87,9 +89,9 @@ def floor_check(scene: Scene, floor_z: float = 0.0, *, under_limit: float = UNDE
         ground = float(statistics.quantiles(values, n=4, method="inclusive")[0])
         what = "the lower quartile of the box bottoms"
         under_at, float_at = under_limit, float_limit
-    else:
-        ground = values[0]
-        what = "the lowest box bottom"
+    else:  # the second lowest: one object alone (a misdetection's wrong size) proves nothing
+        ground = values[1] if len(values) >= 2 else 0.0
+        what = "the second lowest box bottom"
         under_at, float_at = 1.5 * under_limit, 1.5 * float_limit
     if ground < -under_at:
         under = sorted((b, label) for label, b in bottoms if b < -under_at)

@@ -185,3 +185,14 @@ def test_a_loading_that_ends_during_a_capture_does_not_take_over_its_progress_ba
     perceiver.release.set()
     assert preload.join(60) and preload.state == "ready"
     assert session.job.name == JOB_NAME and session.job.running and session.job.fraction == 0.3, session.job
+
+
+def test_the_offline_label_says_whether_the_open_images_ssd_runs(tmp_path: Path) -> None:
+    from console.mapping_job import offline_models_label
+
+    assert offline_models_label(tmp_path) == "YOLOX-Nano, MobileSAM, FastDepth"  # only tmp_path is searched
+    ssd = tmp_path / "oidv4_ssd"
+    ssd.mkdir()
+    for name in ("oidv4_ssd.onnx", "labelmap.txt"):
+        (ssd / name).write_bytes(b"x")
+    assert offline_models_label(tmp_path) == "YOLOX-Nano + Open Images SSD, MobileSAM, FastDepth"

@@ -31,6 +31,14 @@ def test_one_stray_object_under_the_floor_is_mapping_noise() -> None:
     assert floor_check(scene) == []
 
 
+def test_one_object_alone_under_the_floor_proves_nothing_two_do() -> None:
+    """The console case: YOLOX-Nano read a small toy in the simulator's render as a 0.33 "refrigerator"; its
+    1.8 m size put it 0.69 m under the floor and the console blamed the camera pose."""
+    assert floor_check(Scene([_obj(0, "refrigerator", -0.69, 1.8)])) == []
+    (warning,) = floor_check(Scene([_obj(0, "refrigerator", -0.69, 1.8), _obj(1, "chair", -0.3)]))
+    assert "the second lowest box bottom is 0.30 m under it" in warning and "refrigerator -0.69 m" in warning
+
+
 def test_every_object_floating_is_reported_but_one_on_a_table_is_not() -> None:
     floating = Scene([_obj(0, "chair", 0.45), _obj(1, "suitcase", 0.6)])
     (warning,) = floor_check(floating)
