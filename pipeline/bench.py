@@ -274,7 +274,7 @@ def run_bench(
         raise BenchError("models are required unless gt_boxes is set")
     samples = load_dataset(dataset_dir, catalog)
     if sources:
-        samples = [s for s in samples if s.source in set(sources)]
+        samples = _of_sources(samples, sources, dataset_dir)
     if limit is not None:
         samples = samples[: max(0, int(limit))]
     if not samples:
@@ -288,9 +288,11 @@ def run_bench(
     model_names: dict[str, str] = {}
     try:
         for sample in tqdm(samples, desc="bench", unit="img", disable=not progress):
-            loaded = read_image(sample.image_path)  # upright: EXIF orientation applied, said when present
+            loaded = read_image(sample.image_path, min_side=8)  # upright: EXIF orientation applied, said when present
             if loaded.note:
                 tqdm.write(loaded.note)
+            for warning in loaded.warnings:
+                tqdm.write(f"warning: {warning}")
             image = loaded.image
             mapper = shared_mapper
             if gt_boxes:
@@ -319,6 +321,21 @@ def run_bench(
         model_names["note"] = str(models.note)  # type: ignore[union-attr]
     summary = _summarise(records, excluded)
     return BenchReport(str(dataset_dir), "gt-boxes" if gt_boxes else "detector", model_names, summary, records)
+
+
+def _of_sources(samples: Sequence[BenchSample], sources: Sequence[str], dataset_dir: str | Path) -> list[BenchSample]:
+    """The samples of ``sources``, matched ignoring case; a source without samples is a BenchError listing them."""
+    present = sorted({s.source for s in samples})
+    missing = [x for x in sources if x.strip().lower() not in {p.lower() for p in present}]
+    if missing:
+        raise BenchError(f"--source {', '.join(missing)}: no such source in {dataset_dir} (its sources: "
+                         f"{', '.join(present) or 'none'}; matched ignoring case)")
+    return [s for s in samples if s.source.lower() in {x.strip().lower() for x in sources}]
+
+
+def models_line(models: dict[str, Any]) -> str:
+    """``models: detector=..., segmenter=..., depth=..., placement=...`` (bench header, ``map``'s line)."""
+    return "models: " + ", ".join(f"{k}={v}" for k, v in models.items() if k in ("detector", "segmenter", "depth", "placement"))
 
 
 def _score_sample(sample: BenchSample, result: MapResult, vocab: set[str], iou_threshold: float) -> dict[str, Any]:
@@ -481,7 +498,7 @@ def format_report(report: BenchReport) -> str:
     c = s["complete_annotation"]
     lines = [
         f"dataset {report.dataset} ({s['images']} images, mode: {report.mode})",
-        "models: " + ", ".join(f"{k}={v}" for k, v in report.models.items() if k in ("detector", "segmenter", "depth", "placement")),
+        models_line(report.models),
         *([f"note: {report.models['note']}"] if report.models.get("note") else []),
         "",
         f"detection ratio       {_fmt(s['detection_ratio'], '.1%')} of {s['gt_objects_catalog']} ground-truth objects of catalog classes",

@@ -29,6 +29,9 @@ DEFAULT_SIGMA = 0.30
 EXIF_SIGMA = 0.05
 FOV_SIGMA = 0.10
 FULL_FRAME_DIAGONAL_MM = 43.27
+MAX_FOV_DEG = 170.0
+"""Largest field of view [deg] an assumed camera may give either axis (a narrow strip of an image with a
+normal horizontal field of view would otherwise get a near-180 deg vertical one, fx of a few pixels)."""
 
 
 @dataclass(frozen=True)
@@ -59,7 +62,9 @@ def assumed_camera(width: int, height: int, *, hfov_deg: float | None = None,
     """The assumed camera of a ``width`` x ``height`` [px] upright photo (see the module docstring).
 
     Raises:
-        CameraError: ``hfov_deg`` outside 1..179 deg or not finite (named ``--fov``).
+        CameraError: ``hfov_deg`` outside 1..179 deg or not finite (named ``--fov``), or a field of view
+            over :data:`MAX_FOV_DEG` on the other (vertical) axis for this image size (named ``--fov``
+            when stated, with the image size).
     """
     if hfov_deg is not None:
         if not (isinstance(hfov_deg, (int, float)) and math.isfinite(hfov_deg) and 1.0 <= hfov_deg <= 179.0):
@@ -72,6 +77,12 @@ def assumed_camera(width: int, height: int, *, hfov_deg: float | None = None,
     else:
         f = (width / 2.0) / math.tan(math.radians(DEFAULT_HFOV_DEG) / 2.0)
         sigma, how = DEFAULT_SIGMA, f"a typical lens ({DEFAULT_HFOV_DEG:g} deg horizontal field of view)"
+    vfov = math.degrees(2.0 * math.atan2(height / 2.0, f))
+    if vfov > MAX_FOV_DEG:
+        what = f"--fov {hfov_deg:g}" if hfov_deg is not None else f"the focal length assumed from {how}"
+        raise CameraError(f"{what}: on this {width}x{height} px image fx = {f:.1f} px gives a {vfov:.1f} deg vertical "
+                          f"field of view, over the limit of {MAX_FOV_DEG:g} deg (the image is far taller than "
+                          "wide): give a camera file (--camera) or a smaller --fov for this image")
     return AssumedCamera(Intrinsics(f, f, width / 2.0, height / 2.0, int(width), int(height)), sigma, how)
 
 

@@ -15,7 +15,8 @@ from typing import Any, Callable
 
 from pipeline.catalog import Catalog, CatalogError
 from pipeline.mapper import MapperConfig, load_mapping_models
-from pipeline.option_values import OptionError, add_model_dir_option, check_model_dir
+from pipeline.option_values import (OptionError, add_model_dir_option, check_model_dir, check_out_not_input,
+                                    check_pose_range)
 
 __all__ = ["add_bench_parser", "add_calibrate_parser", "add_map_parser", "cmd_bench", "cmd_calibrate", "cmd_map",
            "load_mapping_models"]
@@ -23,6 +24,15 @@ __all__ = ["add_bench_parser", "add_calibrate_parser", "add_map_parser", "cmd_be
 
 class _UserError(Exception):
     """A failure to report without a traceback."""
+
+
+MIN_IMAGE_SIDE = 8
+"""Smallest photo side ``map`` and ``bench`` accept [px] (the mapper's own limit, checked with the file named)."""
+
+MODELS_HELP = ("model set: offline (YOLOX-Nano, MobileSAM, FastDepth, plus the Open Images SSD oidv4_ssd when "
+               "fetched, merged class-aware; the default), offline-oidv4_ssd (without the SSD), offline+oidv4_ssd "
+               "(the SSD required), offline+oidv4_ssd:union (every class of both detectors), default (OWLv2, "
+               "MobileSAM, Depth Anything V2) or cloud")
 
 
 def _config(args: argparse.Namespace) -> MapperConfig:
@@ -43,9 +53,7 @@ def _config(args: argparse.Namespace) -> MapperConfig:
 
 def _add_common(p: argparse.ArgumentParser) -> None:
     g = p.add_argument_group("models and mapping")
-    g.add_argument("--models", default="offline", metavar="SET",
-                   help="model set: offline (YOLOX-Nano, MobileSAM, FastDepth; default), default (OWLv2, MobileSAM, "
-                        "Depth Anything V2) or cloud")
+    g.add_argument("--models", default="offline", metavar="SET", help=MODELS_HELP)
     add_model_dir_option(g)
     g.add_argument("--catalog", type=Path, default=None, help="catalog TOML (default: the packaged one)")
     g.add_argument("--threads", type=int, default=None,
@@ -125,11 +133,17 @@ def cmd_map(args: argparse.Namespace) -> int:
 
     if args.camera is not None and args.fov is not None:
         raise _UserError("--fov is for photos without a camera file; the camera file's intrinsics are used")
+    out = Path(args.out)
+    check_out_not_input(out, [("photo", args.image), ("camera file", args.camera), ("catalog", args.catalog)])
     camera = load_camera_toml(args.camera) if args.camera is not None else None
+    if args.pose is not None:
+        check_pose_range(args.pose, "--pose")
     pose = parse_pose(args.pose, "--pose") if args.pose is not None else Pose()
-    loaded = read_image(args.image)
+    loaded = read_image(args.image, min_side=MIN_IMAGE_SIDE)
     if loaded.note:
         print(loaded.note)
+    for warning in loaded.warnings:
+        print(f"warning: {warning}", file=sys.stderr)
     image = loaded.image
     assumed = None
     if camera is None:  # uncalibrated: a documented default, flagged in the output and the scene
@@ -140,12 +154,13 @@ def cmd_map(args: argparse.Namespace) -> int:
     if args.prompts is not None:
         prompts_from_words(catalog, args.prompts)  # empty list -> error before loading models
     camera.intrinsics.check_image(image.shape[1], image.shape[0])
-    out = Path(args.out)
     if out.exists() and out.is_dir():
         raise _UserError(f"--out {out} is a directory; give a file name such as {out / 'scene.json'}")
     if not out.parent.is_dir():
         raise _UserError(f"--out {out}: the folder {out.parent} does not exist")
     models = _models(args, catalog)
+    if getattr(models, "note", ""):  # e.g. the set's second detector is not fetched (as the bench says)
+        print(f"note: {models.note}", file=sys.stderr)
     with Mapper(models, catalog, _config(args)) as mapper:
         result = mapper.run(image, camera.intrinsics, camera.mount, pose, prompts=args.prompts,
                             image_name=Path(args.image).name)
@@ -157,6 +172,11 @@ def cmd_map(args: argparse.Namespace) -> int:
         scene = dataclasses.replace(scene, captures=tuple(
             dataclasses.replace(c, models={**dict(c.models), "intrinsics": flag}) for c in scene.captures))
         scene = widen_sigmas(scene, assumed.rel_sigma)  # every distance scales with the assumed focal length
+    from pipeline.bench import models_line
+    from pipeline.pose_check import floor_check
+
+    print(models_line(dict(scene.captures[0].models)), file=sys.stderr)
+    pose_warnings = floor_check(scene)  # objects under the floor / floating: a wrong camera pose (as the console)
     debug_files: list[Path] = []
     if args.debug:
         from pipeline.debug_images import write_debug_images
@@ -181,6 +201,8 @@ def cmd_map(args: argparse.Namespace) -> int:
     if debug_files:
         print(f"debug images: {', '.join(str(p) for p in debug_files)}")
     print(f"scene written to {out}")
+    for warning in pose_warnings:  # last, where it is seen; a warning: the exit status stays 0
+        print(f"warning: check the camera pose: {warning}", file=sys.stderr)
     return 0
 
 
@@ -217,6 +239,13 @@ def cmd_bench(args: argparse.Namespace) -> int:
 
     if args.out and Path(args.out).is_dir():
         raise _UserError(f"--out {args.out} is a directory; give a file name such as {Path(args.out) / 'bench_report.json'}")
+    if args.out and not Path(args.out).expanduser().parent.is_dir():
+        raise _UserError(f"--out {args.out}: the folder {Path(args.out).expanduser().parent} does not exist")
+    if args.out:
+        check_out_not_input(args.out, [("catalog", args.catalog), *_dataset_files(args.dataset)])
+    if args.no_models and not args.gt_boxes:
+        raise _UserError("--no-models: only with --gt-boxes (the dataset's 2D boxes stand in for the detector); "
+                         "without it the detector is a model")
     if args.limit is not None and args.limit < 1:
         raise _UserError(f"--limit: must be at least 1, got {args.limit}")
     if not 0.0 < args.iou <= 1.0:  # also refuses nan
@@ -234,6 +263,22 @@ def cmd_bench(args: argparse.Namespace) -> int:
         path = report.save(args.out)
         print(f"\nreport written to {path}")
     return 0
+
+
+def _dataset_files(root: Path) -> list[tuple[str, Path]]:
+    """The files a bench dataset is read from (``index.json``, each sample's JSON and photo) as
+    ``(what, path)``; what cannot be read here is left to :func:`pipeline.bench.load_dataset` to report."""
+    import json
+
+    files: list[tuple[str, Path]] = [("dataset index", root / "index.json")]
+    try:
+        index = json.loads((root / "index.json").read_text())
+    except (OSError, ValueError):
+        return files
+    for entry in index if isinstance(index, list) else []:
+        if isinstance(entry, dict):
+            files += [(f"dataset {key}", root / str(entry[key])) for key in ("json", "image") if entry.get(key)]
+    return files
 
 
 def add_bench_parser(subparsers: Any) -> argparse.ArgumentParser:

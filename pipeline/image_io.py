@@ -13,13 +13,20 @@ objects, in garbage). Pillow reads the headers (size, EXIF). Other formats (PNG,
 WebP, ...) are decoded by OpenCV (``cv2.imdecode`` with ``IMREAD_UNCHANGED``). Conversions:
 
 - grayscale (HxW or HxWx1) -> RGB by repeating the channel;
-- 16-bit -> 8-bit by scaling 0..65535 to 0..255; float images are taken as 0..1;
-- RGBA -> RGB composited on WHITE (transparent pixels become white, as viewers show them);
+- 16-bit -> 8-bit by scaling 0..65535 to 0..255 (a 16-bit file's range), except a 16-bit image whose
+  values all fit in 0..255 (8-bit data stored in 16 bits; scaled it would be black): it is used as
+  8-bit and the load says so (:attr:`LoadedImage.warnings`); float images are taken as 0..1;
+- RGBA -> RGB composited on WHITE (transparent pixels become white, as viewers show them); an alpha
+  channel that is 0 everywhere (a fully transparent picture, usually a misused channel) is ignored,
+  with a warning;
 - CMYK JPEGs -> RGB (Pillow's conversion).
 
 Images larger than :data:`MAX_SIDE` px on a side are REFUSED (:class:`ImageError` with the size and
 the limit) rather than downscaled: a silent downscale would invalidate the camera intrinsics, and
-no robot camera produces such frames.
+no robot camera produces such frames. The size is read from the header (Pillow) BEFORE decoding, so
+a huge file is refused without allocating its pixels. ``min_side`` refuses images too small to use
+(the mapper needs 8 px a side), naming the file. PNGs are checked with Pillow (chunk CRCs, truncation)
+before OpenCV decodes them, so a broken PNG gives our error, not libpng's own stderr line.
 """
 
 from __future__ import annotations
@@ -61,6 +68,8 @@ class LoadedImage:
         label: How the image is named in messages.
         focal_35mm: The EXIF ``FocalLengthIn35mmFilm`` [mm] when the file has it (for an assumed
             camera, see :mod:`pipeline.camera_guess`), else ``None``.
+        warnings: Sentences about conversions the user should know of (8-bit data in a 16-bit file,
+            an alpha channel that is 0 everywhere), each naming the file; empty when none.
     """
 
     image: np.ndarray
@@ -68,6 +77,7 @@ class LoadedImage:
     stored_size: tuple[int, int]
     label: str
     focal_35mm: float | None = None
+    warnings: tuple[str, ...] = ()
 
     @property
     def size(self) -> tuple[int, int]:
@@ -153,12 +163,45 @@ def _exif_focal_35mm(data: bytes) -> float | None:
     return f if 4.0 <= f <= 2000.0 else None
 
 
-def _check_side(w: int, h: int, label: str, max_side: int) -> None:
+def _check_side(w: int, h: int, label: str, max_side: int, min_side: int = 1) -> None:
     if max(w, h) > max_side:
         raise ImageError(f"{label}: image is {w}x{h} px, larger than the limit of {max_side} px on a side")
+    if min(w, h) < min_side:
+        raise ImageError(f"{label}: image is {w}x{h} px, smaller than the minimum of {min_side} px on a side "
+                         "(too small to map)")
 
 
-def _decode_jpeg(data: bytes, label: str, max_side: int) -> tuple[np.ndarray, int | None]:
+def _header(data: bytes) -> tuple[int, int, str | None, int | None] | None:
+    """``(width, height, format, EXIF orientation)`` from the file's header (Pillow, no pixel decode),
+    or ``None`` when Pillow cannot read it (OpenCV may still decode the format)."""
+    try:
+        from PIL import Image
+
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")  # DecompressionBombWarning: the side check below decides
+            with Image.open(io.BytesIO(data)) as im:
+                return int(im.width), int(im.height), im.format, _exif_orientation(im)
+    except Exception:  # noqa: BLE001 - not a format Pillow knows
+        return None
+
+
+def _verify_png(data: bytes, label: str) -> None:
+    """Refuse a truncated or corrupt PNG before OpenCV sees it (libpng would print its own error line
+    on stderr, outside our message). Pillow's ``verify`` reads every chunk and checks its CRC."""
+    from PIL import Image
+
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            with Image.open(io.BytesIO(data)) as im:
+                im.verify()
+    except Exception as exc:  # noqa: BLE001 - any failure here is a broken file
+        text = str(exc) or type(exc).__name__
+        why = "truncated PNG" if "runcat" in text else "corrupt PNG"
+        raise ImageError(f"{label}: {why} ({text}), {len(data)} bytes") from None
+
+
+def _decode_jpeg(data: bytes, label: str, max_side: int, min_side: int = 1) -> tuple[np.ndarray, int | None]:
     """Strict JPEG decode: libjpeg-turbo (``simplejpeg``, ``strict=True``) turns every decoder warning
     about corrupt or truncated data into :class:`ImageError`; Pillow reads the header (size, EXIF)."""
     import simplejpeg
@@ -172,7 +215,7 @@ def _decode_jpeg(data: bytes, label: str, max_side: int) -> tuple[np.ndarray, in
                 orientation = _exif_orientation(im)
     except Exception as exc:  # noqa: BLE001 - anything Pillow cannot parse is not a usable JPEG
         raise ImageError(f"{label}: not a readable image (JPEG header: {exc}, {len(data)} bytes)") from None
-    _check_side(w, h, label, max_side)
+    _check_side(w, h, label, max_side, min_side)
     try:
         if mode == "CMYK":  # libjpeg-turbo has no CMYK -> RGB conversion; Pillow's, strict on truncation
             with Image.open(io.BytesIO(data)) as im:
@@ -191,8 +234,15 @@ def _decode_jpeg(data: bytes, label: str, max_side: int) -> tuple[np.ndarray, in
     return np.ascontiguousarray(arr), orientation
 
 
-def _decode_other(data: bytes, label: str, max_side: int) -> tuple[np.ndarray, int | None]:
-    """OpenCV decode of non-JPEG formats, EXIF orientation read with Pillow when it knows the format."""
+def _decode_other(data: bytes, label: str, max_side: int,
+                  min_side: int = 1) -> tuple[np.ndarray, int | None, tuple[str, ...]]:
+    """OpenCV decode of non-JPEG formats; Pillow reads the header first (size checked before any pixel
+    is decoded, EXIF orientation) and verifies PNGs."""
+    header = _header(data)
+    if header is not None:
+        _check_side(header[0], header[1], label, max_side, min_side)
+        if header[2] == "PNG":
+            _verify_png(data, label)
     try:
         image = cv2.imdecode(np.frombuffer(data, dtype=np.uint8), cv2.IMREAD_UNCHANGED)
     except cv2.error as exc:
@@ -200,43 +250,38 @@ def _decode_other(data: bytes, label: str, max_side: int) -> tuple[np.ndarray, i
     if image is None or image.size == 0:
         raise ImageError(f"{label}: not a readable image (corrupt or unsupported format, {len(data)} bytes)")
     h, w = image.shape[:2]
-    _check_side(w, h, label, max_side)
-    orientation = None
-    try:
-        from PIL import Image
-
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            orientation = _exif_orientation(Image.open(io.BytesIO(data)))
-    except Exception:  # noqa: BLE001 - formats Pillow cannot open have no EXIF for us
-        orientation = None
-    return _to_rgb8(image, label), orientation
+    _check_side(w, h, label, max_side, min_side)
+    orientation = header[3] if header is not None else None
+    notes: list[str] = []
+    return _to_rgb8(image, label, notes), orientation, tuple(notes)
 
 
 def read_image(source: str | os.PathLike[str] | bytes | bytearray | memoryview, *, name: str | None = None,
-               max_side: int = MAX_SIDE) -> LoadedImage:
+               max_side: int = MAX_SIDE, min_side: int = 1) -> LoadedImage:
     """Decode a photo from a path or encoded bytes: the upright RGB image and what was done to it.
 
     Args:
         source: A file path, or the encoded file contents.
         name: How to call the image in error messages (default: the path, or ``"<bytes>"``).
-        max_side: Largest accepted width/height [px].
+        max_side: Largest accepted width/height [px] (checked on the header, before decoding).
+        min_side: Smallest accepted width/height [px] (``map`` and ``bench`` ask for the mapper's 8).
 
     Raises:
         ImageError: The file does not exist or cannot be read, is empty, is not a decodable image,
-            is a truncated or corrupt JPEG, has an unsupported layout or type, or is larger than
-            ``max_side``.
+            is a truncated or corrupt JPEG or PNG, has an unsupported layout or type, or is larger than
+            ``max_side`` or smaller than ``min_side``.
     """
     data, label = _read_bytes(source, name)
     if not data:
         raise ImageError(f"{label}: file is empty")
+    notes: tuple[str, ...] = ()
     if data[:2] == b"\xff\xd8":
-        stored, orientation = _decode_jpeg(data, label, max_side)
+        stored, orientation = _decode_jpeg(data, label, max_side, min_side)
     else:
-        stored, orientation = _decode_other(data, label, max_side)
+        stored, orientation, notes = _decode_other(data, label, max_side, min_side)
     upright = np.ascontiguousarray(apply_orientation(stored, orientation))
     return LoadedImage(upright, orientation, (int(stored.shape[1]), int(stored.shape[0])), label,
-                       _exif_focal_35mm(data))
+                       _exif_focal_35mm(data), notes)
 
 
 def load_image(source: str | os.PathLike[str] | bytes | bytearray | memoryview, *, name: str | None = None,
@@ -261,11 +306,19 @@ def upright_size(path: str | os.PathLike[str]) -> tuple[int, int] | None:
     return (h, w) if orientation in (5, 6, 7, 8) else (w, h)
 
 
-def _to_rgb8(image: np.ndarray, label: str) -> np.ndarray:
+def _to_rgb8(image: np.ndarray, label: str, notes: list[str] | None = None) -> np.ndarray:
+    """``image`` (OpenCV's BGR / BGRA / gray, 8 or 16 bit or float) as uint8 RGB; warnings go to ``notes``."""
+    notes = [] if notes is None else notes
     if image.dtype == np.uint8:
         img = image
     elif image.dtype == np.uint16:
-        img = ((image.astype(np.uint32) * 255 + 32767) // 65535).astype(np.uint8)
+        top = int(image.max())
+        if 0 < top <= 255:  # 0..65535 scaling would make it black
+            notes.append(f"{label}: a 16-bit image whose values all lie within 0..255 (max {top}): it looks like "
+                         "8-bit data stored in 16 bits, so it is used as 8-bit (not scaled from 0..65535)")
+            img = image.astype(np.uint8)
+        else:
+            img = ((image.astype(np.uint32) * 255 + 32767) // 65535).astype(np.uint8)
     elif image.dtype in (np.float32, np.float64):
         img = (np.clip(np.nan_to_num(image), 0.0, 1.0) * 255.0 + 0.5).astype(np.uint8)
     else:
@@ -276,6 +329,10 @@ def _to_rgb8(image: np.ndarray, label: str) -> np.ndarray:
         rgb = np.repeat(img[:, :, None], 3, axis=2)
     elif img.ndim == 3 and img.shape[2] == 3:
         rgb = img[:, :, ::-1]
+    elif img.ndim == 3 and img.shape[2] == 4 and not img[:, :, 3].any():
+        notes.append(f"{label}: the alpha channel is 0 everywhere (a fully transparent picture): the alpha is "
+                     "ignored and the colour channels are used as they are")
+        rgb = img[:, :, 2::-1]
     elif img.ndim == 3 and img.shape[2] == 4:
         bgr = img[:, :, :3].astype(np.float32)
         alpha = img[:, :, 3:4].astype(np.float32) / 255.0

@@ -302,13 +302,25 @@ def load_mapping_models(
     from pipeline.models.ssd import MergedDetector
 
     note = ""
+    forms = "offline, offline-oidv4_ssd, offline+oidv4_ssd, offline+oidv4_ssd:union, default, cloud"
+    if "+" in set_name and "-" in set_name.partition("+")[0]:
+        raise MapperError(f"--models {set_name}: leaves a second detector out ('-') and adds one ('+') at once; "
+                          f"give one of: {forms}")
+    if set_name.count("+") > 1:
+        raise MapperError(f"--models {set_name}: at most one second detector ('SET+NAME'); give one of: {forms}")
     if "+" in set_name:
+        whole = set_name
         set_name, _, extra = set_name.partition("+")
         extra, _, policy = extra.partition(":")
+        if not extra:
+            raise MapperError(f"--models {whole}: no second detector named after '+' "
+                              f"(known: {', '.join(SECOND_DETECTORS)}); give one of: {forms}")
         if policy not in ("", "union"):
             raise MapperError(f"--models ...+{extra}:{policy}: unknown merge (known: {extra}, {extra}:union)")
     elif "-" in set_name:
         set_name, _, left_out = set_name.partition("-")
+        if not left_out:
+            raise MapperError(f"--models {set_name}-: no detector named after '-'; give one of: {forms}")
         if left_out != AUTO_SECOND.get(set_name):
             raise MapperError(f"--models {set_name}-{left_out}: the set {set_name!r} adds no {left_out!r} "
                               f"(it adds: {AUTO_SECOND.get(set_name) or 'nothing'})")

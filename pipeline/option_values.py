@@ -95,5 +95,61 @@ def check_model_dir(explicit: str | os.PathLike[str] | None, option: str = "--mo
     return None
 
 
-__all__ = ["MODEL_DIR_HELP", "OptionError", "ValueListError", "add_model_dir_option", "check_model_dir",
+POSE_XY_LIMIT_M = 10000.0
+"""Largest ``|x|``, ``|y|`` of a robot pose on the command line [m] (world frame: a site, not a planet)."""
+POSE_Z_LIMIT_M = 1000.0
+"""Largest ``|z|`` of a robot pose on the command line [m]."""
+POSE_YAW_LIMIT_DEG = 360.0
+"""Largest ``|yaw|`` of a robot pose on the command line [deg]."""
+
+
+def check_pose_range(text: str, where: str = "--pose") -> list[float]:
+    """The numbers of a pose ``x,y[,z[,yaw_deg]]`` (world frame, metres, degrees), each within its range.
+
+    Like the camera file's ``mount.position`` (robot body frame, within +-10 m) a pose is range-checked,
+    with world-sized limits: ``|x|, |y|`` <= :data:`POSE_XY_LIMIT_M`, ``|z|`` <= :data:`POSE_Z_LIMIT_M`,
+    ``|yaw_deg|`` <= :data:`POSE_YAW_LIMIT_DEG`.
+
+    Raises:
+        ValueListError: Not 2-4 finite numbers, or one out of its range (the option, the value and the range named).
+    """
+    values = parse_numbers(text, where, (2, 3, 4), "x,y[,z[,yaw_deg]] in metres and degrees")
+    limits = (("x", POSE_XY_LIMIT_M, "m"), ("y", POSE_XY_LIMIT_M, "m"), ("z", POSE_Z_LIMIT_M, "m"),
+              ("yaw_deg", POSE_YAW_LIMIT_DEG, "deg"))
+    for v, (name, limit, unit) in zip(values, limits):
+        if abs(v) > limit:
+            raise ValueListError(f"{where}: {name} must be within {-limit:g}..{limit:g} {unit}, got {v:g}")
+    return values
+
+
+def check_out_not_input(out: str | os.PathLike[str], inputs: Sequence[tuple[str, Any]], option: str = "--out") -> None:
+    """Refuse an output path that is one of the command's input files (it would be overwritten).
+
+    Args:
+        out: The output file the user gave.
+        inputs: ``(what, path)`` pairs, e.g. ``("photo", "a.jpg")``; ``None`` paths are skipped.
+        option: The output option's name for the message.
+
+    Raises:
+        OptionError: ``out`` resolves to (or is a link to) one of ``inputs``; the message names both.
+    """
+    target = Path(out).expanduser()
+    resolved = target.resolve()
+    for what, path in inputs:
+        if path is None or not str(path):
+            continue
+        p = Path(path).expanduser()
+        same = p.resolve() == resolved
+        if not same and target.exists() and p.exists():
+            try:
+                same = os.path.samefile(target, p)
+            except OSError:
+                same = False
+        if same:
+            raise OptionError(f"{option} {out}: is the {what} {path} read by this command; writing there would "
+                              f"overwrite it: give {option} another file name")
+
+
+__all__ = ["MODEL_DIR_HELP", "OptionError", "POSE_XY_LIMIT_M", "POSE_YAW_LIMIT_DEG", "POSE_Z_LIMIT_M",
+           "ValueListError", "add_model_dir_option", "check_model_dir", "check_out_not_input", "check_pose_range",
            "looks_like_negative_value", "parse_numbers"]

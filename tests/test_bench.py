@@ -206,7 +206,7 @@ def test_dev_set_with_the_offline_models(tmp_path: Path) -> None:
     assert s["mean_time_s"]["total"] > 0 and s["mean_time_s"]["detect"] > 0
     report.save(tmp_path / "r.json")
     # the offline set adds the Open Images SSD (class-aware merge) when its files are present
-    expected = "yolox_nano+oidv4_ssd" if (SHARED / "models" / "oidv4_ssd").is_dir() else "yolox_nano"
+    expected = "yolox_nano+oidv4_ssd (class-aware)" if (SHARED / "models" / "oidv4_ssd").is_dir() else "yolox_nano"
     assert json.loads((tmp_path / "r.json").read_text())["models"]["detector"] == expected
 
 

@@ -195,7 +195,7 @@ def test_offline_set_adds_the_ssd_when_present_and_says_so_when_absent(tmp_path:
     catalog = Catalog.load()
     full = load_mapping_models("offline", SHARED, catalog)
     assert isinstance(full.detector, MergedDetector) and full.detector.policy == "class_aware"
-    assert full.detector.name == "yolox_nano+oidv4_ssd" and not full.note
+    assert full.detector.name == "yolox_nano+oidv4_ssd (class-aware)" and not full.note
     first, second = full.detector.roles(catalog.prompts())
     assert {"desk", "cardboard_box", "table"} <= second and not ({"person", "car", "chair"} & second)
     assert {"person", "car", "chair"} <= first

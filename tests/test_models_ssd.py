@@ -66,4 +66,4 @@ def test_merged_detections_keep_the_best_of_a_class_and_every_class() -> None:
     assert [(d.label, d.prompt, d.score) for d in out] == [("person", "person", 0.9), ("chair", "Chair", 0.7),
                                                           ("desk", "Desk", 0.5)]
     assert m.vocabulary([("x", "chair"), ("y", "desk"), ("w", "bed")]) == frozenset({"chair", "desk"})
-    assert m.name == "yolox+ssd" and m.input_size == (416, 416)
+    assert m.name == "yolox+ssd (union)" and m.input_size == (416, 416)

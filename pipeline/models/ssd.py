@@ -188,7 +188,8 @@ class MergedDetector:
         if same_object_iou is not None and not 0.0 < float(same_object_iou) <= 1.0:
             raise ModelError(f"MergedDetector.same_object_iou: must be in (0, 1] or None, got {same_object_iou!r}")
         self.members = (first, second)
-        self.name = f"{getattr(first, 'name', 'detector')}+{getattr(second, 'name', 'detector')}"
+        self.name = (f"{getattr(first, 'name', 'detector')}+{getattr(second, 'name', 'detector')} "
+                     f"({'union' if policy == 'union' else 'class-aware'})")  # which merge ran, in every header
         self.score_threshold = min(float(getattr(first, "score_threshold", 0.0)),
                                    float(getattr(second, "score_threshold", 0.0)))
         self.nms_iou = float(nms_iou)
