@@ -352,6 +352,8 @@ def cmd_calibrate(args: argparse.Namespace) -> int:
         loaded = read_image(f, name=f.name)
         if loaded.note:
             print(loaded.note)
+        for warning in loaded.warnings:
+            print(f"warning: {warning}", file=sys.stderr)
         photos.append((f.name, loaded.image))
     try:
         cal = calibrate(photos, board, min_views=args.min_views)
