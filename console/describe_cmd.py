@@ -5,7 +5,9 @@ Registered by :mod:`console.cli`. The scene must be in the world frame; the robo
 the pose of the scene's latest capture, if it has one. The grid options are those of ``plan``
 (reachability uses the same grid and costs). User mistakes (missing or malformed file, a bad
 ``--robot`` value, a bad grid option) print ``morphonavi describe: error: ...`` naming the field
-and exit with status 2.
+and exit with status 2. When objects lie outside the planning workspace (``--bounds``, default the
+paper's 5 x 8 x 3 m room) the summary ends with a note saying so and suggesting ``--bounds`` that
+hold them all.
 """
 
 from __future__ import annotations
@@ -55,10 +57,39 @@ def robot_from_captures(scene: Any) -> tuple[float, float, float, float] | None:
     return vals if all(math.isfinite(v) for v in vals) else None
 
 
+def bounds_hint(graph: dict[str, Any], scene: Any, pad: float) -> str:
+    """A note for objects the graph marks ``outside_workspace``: how many, and ``--bounds`` (world
+    [m], rounded out to whole metres, ``pad`` [m] around every object and the robot, the z range
+    kept) that hold them; ``""`` when there are none."""
+    out = [o["id"] for o in graph["objects"] if (o.get("reach") or {}).get("code") == "outside_workspace"]
+    ws = graph.get("workspace")
+    if not out or not ws:
+        return ""
+    lo, hi = list(ws["min"][:2]), list(ws["max"][:2])
+    pts = [o.position for o in scene.objects] + ([graph["robot"]["position"]] if graph.get("robot") else [])
+    for o in scene.objects:
+        r = math.hypot(o.size[0], o.size[2]) / 2 + pad
+        for a in (0, 1):
+            lo[a], hi[a] = min(lo[a], o.position[a] - r), max(hi[a], o.position[a] + r)
+    for p in pts:
+        for a in (0, 1):
+            lo[a], hi[a] = min(lo[a], p[a] - pad), max(hi[a], p[a] + pad)
+    b = [math.floor(lo[0]), math.floor(lo[1]), ws["min"][2], math.ceil(hi[0]), math.ceil(hi[1]), ws["max"][2]]
+    text = ",".join(f"{v:g}" for v in b)
+    n = len(out)
+    w = (f"x {ws['min'][0]:g} to {ws['max'][0]:g} m, y {ws['min'][1]:g} to {ws['max'][1]:g} m, "
+         f"z {ws['min'][2]:g} to {ws['max'][2]:g} m")
+    return (f"({n} object{'' if n == 1 else 's'} ({', '.join(out[:5])}{', ...' if n > 5 else ''}) "
+            f"{'lies' if n == 1 else 'lie'} outside the planning workspace ({w}), so "
+            f"{'it is' if n == 1 else 'they are'} unreachable here: give one that holds "
+            f"{'it' if n == 1 else 'them'} with --bounds xmin,ymin,zmin,xmax,ymax,zmax, e.g. --bounds={text})")
+
+
 def describe(args: argparse.Namespace) -> tuple[str, dict[str, Any]]:
     """The summary text and the graph for parsed ``describe`` arguments (raises :class:`DescribeError`)."""
     from pipeline.scene import Scene, SceneError
     from planner.grid import CostWeights, GridError, Workspace, build_grid
+    from planner.object_goal import APPROACH_MAX
     from planner.route import Route
     from planner.scene_graph import SceneGraphError, build_scene_graph
     from planner.scene_summary import summarize
@@ -90,6 +121,9 @@ def describe(args: argparse.Namespace) -> tuple[str, dict[str, Any]]:
     except (GridError, SceneGraphError) as exc:
         raise DescribeError(str(exc)) from None
     text = summarize(graph)
+    hint = bounds_hint(graph, scene, APPROACH_MAX + args.margin)
+    if hint:
+        text += f"\n{hint}"
     if note:
         text += f"\n({note})"
     return text, graph
@@ -120,7 +154,7 @@ def add_describe_parser(subparsers: Any) -> argparse.ArgumentParser:
     p = subparsers.add_parser(
         "describe", help="describe a scene: objects, relations, groups, reachability (text or JSON scene graph)",
         description="Print a short summary of a world-frame scene for people and language models, or its scene "
-                    "graph (--json, schema version 1: --schema prints it).")
+                    "graph (--json, schema version 2: --schema prints it).")
     p.add_argument("scene", type=Path, nargs="?", default=None, help="scene JSON (world frame)")
     p.add_argument("--robot", default=None, metavar="X,Y[,Z[,YAW_DEG]]",
                    help="robot pose in the world frame [m, degrees from +x]; default: the latest capture's")
@@ -131,4 +165,5 @@ def add_describe_parser(subparsers: Any) -> argparse.ArgumentParser:
     return p
 
 
-__all__ = ["DescribeError", "add_describe_parser", "cmd_describe", "describe", "parse_robot", "robot_from_captures"]
+__all__ = ["DescribeError", "add_describe_parser", "bounds_hint", "cmd_describe", "describe", "parse_robot",
+           "robot_from_captures"]

@@ -25,8 +25,16 @@ Reachability from a start point, with the Aerial-Ground A*'s own rules:
   approach cell is then a *landing spot*: free floor (not within the margin of an obstacle)
   with a passable take-off cell above, if one lies within :data:`APPROACH_MAX`; else any
   passable floor cell (the A* lands where it can and walks the rest);
-- ``none``: no approach cell is connected to the start at all (or none exists within
-  :data:`APPROACH_MAX`).
+- ``none``: no approach cell can be used; :attr:`Approach.code` says why, checked in this order
+  (:data:`REASONS`): ``outside_workspace`` (no grid cell within :data:`APPROACH_MAX` of it: the
+  object lies outside the planning workspace, which has to be widened), ``no_free_floor`` (every
+  floor cell within :data:`APPROACH_MAX` is occupied), ``start_cut_off`` (the robot's own
+  component holds no floor), ``closed_in`` (passable floor lies beside it but neither walking nor
+  flying gets there), ``cramped`` (floor the robot gets to lies beside it, but none keeps the
+  robot's radius from every object), ``walled_off`` (some such floor keeps the radius, but another
+  object stands between each spot and the object), ``planner`` (the A* found no path where the
+  components said there was one). When an unreachable object's centre lies outside the workspace
+  the reason says so too.
 
 The chosen approach cell is then planned with the A* (:meth:`planner.route.Route.plan`), which
 gives the path cost and, for a flight, the landing spot of the resulting mission.
@@ -57,6 +65,11 @@ REACH_TOL = 0.02
 REACH_STEP = 0.02
 """Sampling step [m] along the line from an approach point to the object."""
 
+REASONS = ("start_unusable", "outside_workspace", "no_free_floor", "start_cut_off", "closed_in", "cramped",
+           "walled_off", "planner")
+"""Codes of why an object cannot be reached (:attr:`Approach.code`); ``start_unusable`` goes with mode
+``unknown`` (the robot's own position cannot be planned from), the others with mode ``none``."""
+
 Vec3 = tuple[float, float, float]
 
 
@@ -78,6 +91,7 @@ class Approach:
             when walking is possible.
         landing: The landing spot on the floor (world [m]) when the A* path flies, else ``None``.
         reason: Why the object is unreachable, empty otherwise.
+        code: The reason as one of :data:`REASONS`, empty when reachable.
     """
 
     object_id: str
@@ -88,6 +102,7 @@ class Approach:
     planned: str = ""
     landing: Vec3 | None = None
     reason: str = ""
+    code: str = ""
 
 
 def footprint(obj: SceneObject) -> np.ndarray:
@@ -191,9 +206,10 @@ class Reachability:
     def approach(self, obj: SceneObject, plan: bool = True) -> Approach:
         """Where to stand beside ``obj`` and how to get there (see the module docstring)."""
         if self.start_problem:
-            return Approach(obj.id, "unknown", reason=self.start_problem)
+            return Approach(obj.id, "unknown", reason=self.start_problem, code="start_unusable")
         ws = self.grid.workspace
-        connected = False  # some connected floor lies within APPROACH_MAX
+        connected = False  # some floor the robot gets to lies within APPROACH_MAX
+        roomy = False  # ... and some of it keeps the robot's radius from every object
         for mode, cand in (("walk", self._walk & self._ground_ok), ("fly", self._landable),
                            ("fly", self._all[:, :, 0] & self._ground_ok)):
             if not cand.any():
@@ -208,22 +224,44 @@ class Reachability:
             idx, pts, gap = idx[near], pts[near], gap[near]
             to_start = np.hypot(pts[:, 0] - self.start[0], pts[:, 1] - self.start[1])
             order = np.lexsort((idx[:, 1], idx[:, 0], np.round(to_start, 6), np.round(gap, 6)))
-            best = next((int(b) for b in order if self._clear(idx[b]) and self._in_reach(obj, pts[b])), None)
+            clear = [int(b) for b in order if self._clear(idx[b])]
+            roomy = roomy or bool(clear)
+            best = next((b for b in clear if self._in_reach(obj, pts[b])), None)
             if best is None:
                 continue
             goal = (float(pts[best, 0]), float(pts[best, 1]), float(ws.floor))
             if not plan:
                 return Approach(obj.id, mode, goal, float(gap[best]))
             return self._planned(obj.id, mode, goal, float(gap[best]))
-        if not self._all[:, :, 0].any() and not self._walk.any():
-            reason = "the robot's position is cut off from the floor"
-        elif connected:
-            reason = (f"no floor spot within {APPROACH_MAX:.1f} m of it keeps the robot's {self.grid.margin:.2f} m "
-                      "radius from every object with nothing in between (too cramped)")
+        code, reason = self._why_not(obj, connected, roomy)
+        return Approach(obj.id, "none", reason=reason, code=code)
+
+    def _why_not(self, obj: SceneObject, connected: bool, roomy: bool) -> tuple[str, str]:
+        """``(code, text)``: why no approach cell beside ``obj`` can be used (order: module docstring)."""
+        ws = self.grid.workspace
+        box = (f"x {ws.min[0]:.2f} to {ws.max[0]:.2f} m, y {ws.min[1]:.2f} to {ws.max[1]:.2f} m")
+        near = footprint_distance(obj, self._xy.reshape(-1, 2)).reshape(self._xy.shape[:2]) <= APPROACH_MAX + 1e-9
+        x, y = obj.position[0], obj.position[1]
+        if not near.any():
+            return "outside_workspace", (f"it lies outside the planning workspace ({box}; its centre at "
+                                         f"({x:.2f}, {y:.2f})): widen the workspace to plan there")
+        r = f"{APPROACH_MAX:.1f} m"
+        if not (near & self._ground_ok).any():
+            code, text = "no_free_floor", f"no free floor within {r} of it: obstacles cover the floor around it"
+        elif not self._all[:, :, 0].any() and not self._walk.any():
+            code, text = "start_cut_off", "the robot's position is cut off from the floor"
+        elif not connected:
+            code, text = "closed_in", (f"the free floor within {r} of it cannot be reached by walking or by flying "
+                                       "(closed in by obstacles)")
+        elif not roomy:
+            code, text = "cramped", (f"no floor spot within {r} of it that the robot gets to keeps the robot's "
+                                     f"{self.grid.margin:.2f} m radius from every object (too cramped)")
         else:
-            reason = (f"no floor within {APPROACH_MAX:.1f} m of it can be reached by walking or by flying "
-                      "(closed in by obstacles)")
-        return Approach(obj.id, "none", reason=reason)
+            code, text = "walled_off", (f"another object stands between it and every floor spot within {r} that "
+                                        f"the robot gets to with its {self.grid.margin:.2f} m radius clear (walled off)")
+        if not (ws.min[0] <= x <= ws.max[0] and ws.min[1] <= y <= ws.max[1]):
+            text += f"; its centre ({x:.2f}, {y:.2f}) lies outside the planning workspace ({box})"
+        return code, text
 
     def _clear(self, cell: np.ndarray) -> bool:
         """Whether ground cell ``(i, j)``'s centre keeps the robot's radius from every object's footprint."""
@@ -258,7 +296,7 @@ class Reachability:
     def _planned(self, oid: str, mode: str, goal: Vec3, gap: float) -> Approach:
         res = self.route.plan(self.start, goal)
         if not res.ok:  # components say yes; the A* disagrees only on a corner case: say so
-            return Approach(oid, "none", reason=res.message)
+            return Approach(oid, "none", reason=res.message, code="planner")
         flies = bool(np.any(res.cells[:, 2] > 0))
         landing: Vec3 | None = None
         if flies:
@@ -284,5 +322,5 @@ def goal_beside(scene: Scene, grid: PlanningGrid, name: str, start: Sequence[flo
     return obj, app
 
 
-__all__ = ["APPROACH_MAX", "Approach", "ObjectGoalError", "Reachability", "find_object", "footprint",
+__all__ = ["APPROACH_MAX", "REASONS", "Approach", "ObjectGoalError", "Reachability", "find_object", "footprint",
            "footprint_distance", "goal_beside"]

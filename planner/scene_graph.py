@@ -11,8 +11,12 @@ Deterministic rules and their thresholds (all module constants):
 - **Support**: an object stands on the floor when its bottom is within :data:`SUPPORT_TOL` of the
   floor; else on the object whose top is within :data:`SUPPORT_TOL` of its bottom and whose
   footprint covers at least :data:`SUPPORT_OVERLAP` of its own (the highest such top, then the
-  largest overlap); else it is unsupported (it seems to float: an uncertainty).
-  ``A on_top_of B`` and ``B under A`` follow from it.
+  largest overlap); else it is unsupported. ``A on_top_of B`` and ``B under A`` follow from it.
+  Each object's ``placement`` (:data:`PLACEMENTS`) is ``below_floor`` when its bottom lies more
+  than :data:`SUPPORT_TOL` below the floor, whatever it rests on (it is sunk into the floor, or
+  wholly under it: a mapping error, stated as an uncertainty); else ``on_floor``, ``on_object``,
+  or ``floating`` (unsupported with its bottom above the floor: an uncertainty too).
+  ``floor_gap`` is its bottom minus the floor [m], negative below the floor.
 - **next_to** (symmetric, listed once): footprints at most :data:`NEXT_TO_GAP` apart
   horizontally, their height ranges overlapping, and neither standing on the other.
 - **As seen from the robot** (only with a robot pose): each object's footprint spans an interval
@@ -32,9 +36,12 @@ Deterministic rules and their thresholds (all module constants):
   group are left out; relations of an outside object to several members are stated once, against
   the group (left / right are not stated for groups).
 - **Reachability** (with a robot pose and a grid): walk, fly or none, by
-  :class:`planner.object_goal.Reachability` (the Aerial-Ground A*'s own connectivity and costs).
+  :class:`planner.object_goal.Reachability` (the Aerial-Ground A*'s own connectivity and costs);
+  when unreachable, ``reach.code`` (:data:`planner.object_goal.REASONS`) and ``reach.reason`` say
+  why: outside the planning workspace, no free floor beside it, closed in, cramped, walled off...
 - **Uncertainties**: detector score below :data:`LOW_SCORE`, a size not from the catalog, a
-  position from the depth map only, an object that seems to float, a fused horizontal position
+  position from the depth map only, an object that seems to float or lies below the floor (how
+  far, in words: never a negative height "above" the floor), a fused horizontal position
   error of :data:`SIGMA_WARN` or more (:func:`position_sigma`; not for pinned objects), and the
   map fusion's corrections (the object's ``flags``).
 """
@@ -55,7 +62,9 @@ from .object_goal import Reachability, footprint
 from .route import Route
 from .view_geometry import RobotView, overlap_fraction, polygon_gap
 
-GRAPH_SCHEMA_VERSION = 1
+GRAPH_SCHEMA_VERSION = 2
+"""Version 2 added ``placement`` and ``floor_gap`` to objects and ``code`` to ``reach``."""
+PLACEMENTS = ("on_floor", "on_object", "floating", "below_floor")
 SUPPORT_TOL = 0.10  # [m]
 SUPPORT_OVERLAP = 0.30  # fraction of the upper footprint
 NEXT_TO_GAP = 0.50  # [m]
@@ -120,6 +129,28 @@ def _bottom(o: SceneObject) -> float:
 
 def _top(o: SceneObject) -> float:
     return o.position[2] + o.size[1] / 2
+
+
+def placement(on: str | None, floor_gap: float) -> str:
+    """One of :data:`PLACEMENTS` for an object standing on ``on`` (``"floor"``, an id or ``None``)
+    whose bottom is ``floor_gap`` [m] above the floor (negative below it)."""
+    if floor_gap < -SUPPORT_TOL:
+        return "below_floor"
+    return "on_floor" if on == "floor" else "floating" if on is None else "on_object"
+
+
+def placement_text(kind: str, floor_gap: float, height: float) -> str:
+    """The placement problem of an object in words (``""`` when there is none): ``floor_gap`` [m]
+    is its bottom above the floor (negative below), ``height`` [m] its own height."""
+    if kind == "floating":
+        return f"seems to float {floor_gap:.2f} m above the floor with nothing under it"
+    if kind != "below_floor":
+        return ""
+    depth = -floor_gap
+    if depth >= height:
+        return (f"lies entirely below the floor (its top {depth - height:.2f} m under it, its bottom "
+                f"{depth:.2f} m): likely a mapping error")
+    return f"sunk {depth:.2f} m into the floor: likely a mapping error"
 
 
 def natural_key(text: str) -> tuple[Any, ...]:
@@ -253,6 +284,7 @@ def build_scene_graph(scene: Scene, robot: Sequence[float] | None = None, grid: 
     fl = float(floor) if floor is not None else (grid.workspace.floor if grid is not None else 0.0)
     n = len(objs)
     support = _support(objs, fl)
+    place = [placement(on, _bottom(o) - fl) for o, (on, _) in zip(objs, support)]
     feet = [footprint(o) for o in objs]
     gaps: dict[tuple[int, int], float] = {}
     for a in range(n):
@@ -312,7 +344,8 @@ def build_scene_graph(scene: Scene, robot: Sequence[float] | None = None, grid: 
             "id": o.id, "label": o.label, "score": _r(o.score),
             "centre": [_r(v) for v in o.position], "size": [_r(v) for v in o.size], "yaw": _r(o.yaw, 4),
             "bottom": _r(_bottom(o)), "top": _r(_top(o)),
-            "on": support[a][0], "group": group_of.get(o.id),
+            "on": support[a][0], "placement": place[a], "floor_gap": _r(_bottom(o) - fl),
+            "group": group_of.get(o.id),
             "from_robot": None, "visibility": None, "reach": None, "uncertain": [],
         }
         if view is not None:
@@ -331,7 +364,7 @@ def build_scene_graph(scene: Scene, robot: Sequence[float] | None = None, grid: 
                             "cost": None if not math.isfinite(app.cost) else _r(app.cost),
                             "planned": app.planned or None,
                             "landing": None if app.landing is None else [_r(v) for v in app.landing],
-                            "reason": app.reason or None}
+                            "reason": app.reason or None, "code": app.code or None}
         u = rec["uncertain"]
         if o.score < LOW_SCORE:
             u.append(f"low detector score {o.score:.2f}")
@@ -339,8 +372,9 @@ def build_scene_graph(scene: Scene, robot: Sequence[float] | None = None, grid: 
             u.append("size estimated, not from the catalog")
         if o.source.method == "depth":
             u.append("position from the depth map only")
-        if support[a][0] is None:
-            u.append(f"seems to float {support[a][1]:.2f} m above the floor with nothing under it")
+        problem = placement_text(place[a], _bottom(o) - fl, o.size[1])
+        if problem:
+            u.append(problem)
         sigma = position_sigma(o)
         if sigma is not None and sigma >= SIGMA_WARN and not getattr(o, "is_pinned", False):
             u.append(f"position uncertain by about {sigma:.2f} m (1 sigma)")
@@ -376,4 +410,5 @@ def build_scene_graph(scene: Scene, robot: Sequence[float] | None = None, grid: 
     }
 
 
-__all__ = ["GRAPH_SCHEMA_VERSION", "RobotPose", "SceneGraphError", "build_scene_graph", "check_robot", "direction"]
+__all__ = ["GRAPH_SCHEMA_VERSION", "PLACEMENTS", "RobotPose", "SceneGraphError", "build_scene_graph", "check_robot",
+           "direction", "placement", "placement_text"]

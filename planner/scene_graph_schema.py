@@ -3,12 +3,23 @@
 The graph is what :func:`planner.scene_graph.build_scene_graph` returns and what
 ``morphonavi describe SCENE.json --json`` prints. Positions are world frame [m], bearings and
 axes in degrees (bearings in the robot frame: 0 ahead, positive to the left), yaw in radians.
-A field that needs the robot pose or the grid is ``null`` without it. Version 1; a change that
-removes or renames a field bumps the version.
+A field that needs the robot pose or the grid is ``null`` without it. A change that adds,
+removes or renames a field bumps the version (the schema allows no unknown fields).
+
+- Version 2 (:data:`SCENE_GRAPH_SCHEMA`, what ``describe --schema`` prints): each object's
+  ``placement`` (``on_floor``, ``on_object``, ``floating`` or ``below_floor``: bottom more than
+  0.10 m under the floor, a mapping error) and ``floor_gap`` (bottom minus floor [m], negative
+  below it); each ``reach``'s ``code``, why it is unreachable (``outside_workspace``,
+  ``no_free_floor``, ``start_cut_off``, ``closed_in``, ``cramped``, ``walled_off``, ``planner``,
+  ``start_unusable``; ``null`` when reachable).
+- Version 1 (:data:`SCENE_GRAPH_SCHEMA_V1`): the same without those three fields; an object with
+  ``on: null`` was unsupported, floating or below the floor (compare ``bottom`` with the floor).
+  :func:`schema_for` picks the schema of a graph's version.
 """
 
 from __future__ import annotations
 
+import copy
 from typing import Any
 
 _NUM = {"type": "number"}
@@ -85,7 +96,7 @@ _GROUP = {
     },
 }
 
-SCENE_GRAPH_SCHEMA: dict[str, Any] = {
+SCENE_GRAPH_SCHEMA_V1: dict[str, Any] = {
     "$schema": "https://json-schema.org/draft/2020-12/schema",
     "$id": "https://morphonavi.example/scene_graph/v1.json",
     "title": "MorphoNavi scene graph, version 1",
@@ -121,6 +132,40 @@ SCENE_GRAPH_SCHEMA: dict[str, Any] = {
         "uncertainties": {"type": "array", "items": {"type": "string"}},
     },
 }
-"""The schema; subjects and objects of relations are object ids or group ids (``group-N``)."""
+"""Version 1 (kept to read older graphs); subjects and objects of relations are object ids or group ids."""
 
-__all__ = ["SCENE_GRAPH_SCHEMA"]
+REASON_CODES = ["outside_workspace", "no_free_floor", "start_cut_off", "closed_in", "cramped", "walled_off",
+                "planner", "start_unusable"]
+"""``reach.code`` values (the same as :data:`planner.object_goal.REASONS`)."""
+
+
+def _version_2() -> dict[str, Any]:
+    s = copy.deepcopy(SCENE_GRAPH_SCHEMA_V1)
+    s["$id"] = "https://morphonavi.example/scene_graph/v2.json"
+    s["title"] = "MorphoNavi scene graph, version 2"
+    s["properties"]["version"] = {"const": 2}
+    obj = s["properties"]["objects"]["items"]
+    obj["required"] += ["placement", "floor_gap"]
+    obj["properties"]["placement"] = {
+        "enum": ["on_floor", "on_object", "floating", "below_floor"],
+        "description": "below_floor: bottom more than 0.10 m under the floor (sunk into it or wholly under it, "
+                       "a mapping error), whatever it rests on; floating: nothing under it, bottom above the floor"}
+    obj["properties"]["floor_gap"] = {"type": "number",
+                                      "description": "bottom minus the floor height [m], negative below the floor"}
+    reach = obj["properties"]["reach"]["anyOf"][0]
+    reach["required"] += ["code"]
+    reach["properties"]["code"] = {"enum": [*REASON_CODES, None],
+                                   "description": "why it is unreachable; null when it can be reached"}
+    return s
+
+
+SCENE_GRAPH_SCHEMA: dict[str, Any] = _version_2()
+"""The current schema (version 2); subjects and objects of relations are object ids or group ids (``group-N``)."""
+
+
+def schema_for(graph: dict[str, Any]) -> dict[str, Any]:
+    """The schema of ``graph``'s ``version`` (1 or 2; the current one for anything else, which then fails)."""
+    return SCENE_GRAPH_SCHEMA_V1 if graph.get("version") == 1 else SCENE_GRAPH_SCHEMA
+
+
+__all__ = ["REASON_CODES", "SCENE_GRAPH_SCHEMA", "SCENE_GRAPH_SCHEMA_V1", "schema_for"]

@@ -6,13 +6,20 @@ first (at most :data:`MAX_OBJECT_LINES`; the rest are counted by label), then th
 object line states at most :data:`MAX_RELATIONS` relations, chosen in the order support,
 behind, next to, in front of, left / right. The whole text never exceeds :data:`MAX_CHARS`
 characters, whatever the number of objects. Input: the dict of
-:func:`planner.scene_graph.build_scene_graph` (world frame, metres).
+:func:`planner.scene_graph.build_scene_graph` (world frame, metres), version 2 or 1 (a version-1
+graph has no ``placement``: it is worked out from ``bottom``, ``on`` and the workspace floor).
+
+An object's placement is worded by its sign: ``floating 0.44 m above the floor`` only for a
+positive gap with nothing under it; an object whose bottom is below the floor is ``sunk 0.44 m
+into the floor`` (or ``entirely below the floor``), a mapping error, never "floating".
 """
 
 from __future__ import annotations
 
 from collections import Counter
 from typing import Any
+
+from .scene_graph import placement
 
 MAX_OBJECT_LINES = 12
 MAX_GROUP_LINES = 5
@@ -69,15 +76,40 @@ def _reach_text(o: dict[str, Any]) -> str:
     return "reachability unknown"
 
 
-def _object_line(o: dict[str, Any], rels: list[tuple[str, str]], names: dict[str, str]) -> str:
+def _placement(o: dict[str, Any], floor: float) -> tuple[str, float]:
+    """``(placement, floor_gap [m])`` of an object record; worked out for a version-1 record."""
+    if "placement" in o:
+        return o["placement"], o["floor_gap"]
+    gap = o["bottom"] - floor
+    return placement(o["on"], gap), gap
+
+
+def _placement_bit(kind: str, gap: float, height: float) -> str:
+    if kind == "on_floor":
+        return "on the floor"
+    if kind == "floating":
+        return f"floating {gap:.2f} m above the floor"
+    if kind == "below_floor":
+        if -gap >= height:
+            return f"entirely below the floor, its bottom {-gap:.2f} m under it (a mapping error?)"
+        return f"sunk {-gap:.2f} m into the floor (a mapping error?)"
+    return ""  # on an object: said by its on_top_of relation
+
+
+def _floor(graph: dict[str, Any]) -> float:
+    ws = graph.get("workspace")
+    return float(ws["min"][2]) if ws else 0.0
+
+
+def _object_line(o: dict[str, Any], rels: list[tuple[str, str]], names: dict[str, str], floor: float = 0.0) -> str:
     parts = [f"{nice(o['label'])} ({o['id']})"]
     fr = o.get("from_robot")
     head = f"- {parts[0]}: " + (f"{fr['distance']:.1f} m {fr['direction']}" if fr else _xy(o["centre"]))
     bits = []
-    if o["on"] == "floor":
-        bits.append("on the floor")
-    elif o["on"] is None:
-        bits.append("floating")
+    kind, gap = _placement(o, floor)
+    where = _placement_bit(kind, gap, o["top"] - o["bottom"])
+    if where:
+        bits.append(where)
     rels = sorted(rels, key=lambda r: (_REL_ORDER.index(r[0]), not r[1].startswith("group-"), r[1]))
     said = 0
     for kind, other in rels:
@@ -95,9 +127,14 @@ def _object_line(o: dict[str, Any], rels: list[tuple[str, str]], names: dict[str
     reach = _reach_text(o)
     if reach:
         bits.append(reach)
-    if o["uncertain"]:
-        bits.append("uncertain: " + ", ".join(o["uncertain"][:2]))
+    unsure = [u for u in o["uncertain"] if not _restates_placement(u)]  # the placement is said above
+    if unsure:
+        bits.append("uncertain: " + ", ".join(unsure[:2]))
     return head + "; " + "; ".join(bits) + "."
+
+
+def _restates_placement(text: str) -> bool:
+    return text.startswith(("seems to float ", "sunk ", "lies entirely below the floor", "floating"))
 
 
 def _group_line(g: dict[str, Any], graph: dict[str, Any], names: dict[str, str]) -> str:
@@ -151,7 +188,7 @@ def summarize(graph: dict[str, Any]) -> str:
     if single:
         lines.append("Objects, nearest first:" if robot else "Objects:")
         for o in single[:MAX_OBJECT_LINES]:
-            lines.append(_object_line(o, rels.get(o["id"], []), names))
+            lines.append(_object_line(o, rels.get(o["id"], []), names, _floor(graph)))
         rest = single[MAX_OBJECT_LINES:]
         if rest:
             counts = Counter(nice(o["label"]) for o in rest)

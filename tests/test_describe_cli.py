@@ -142,3 +142,32 @@ def test_describe_piped_into_a_reader_that_leaves_early_prints_no_traceback(room
     err = proc.stderr.read().decode()
     assert proc.wait(timeout=120) == 0, err
     assert first == b"{" and "Traceback" not in err and "BrokenPipeError" not in err, err
+
+
+def test_describe_far_objects_points_to_bounds_and_sunk_ones_are_below_the_floor(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """A street scene (cars 57 and 73 m off) in the default 5 x 8 x 3 m workspace, a table 0.44 m sunk."""
+    scene = Scene(objects=(
+        SceneObject("car-1", "car", (58.0, 3.0, 0.75), (1.8, 1.5, 4.5)),
+        SceneObject("car-2", "car", (74.0, -2.0, 0.75), (1.8, 1.5, 4.5)),
+        SceneObject("table-1", "table", (2.5, 3.0, 0.375 - 0.44), (0.8, 0.75, 1.2)),
+    ))
+    path = scene.save(tmp_path / "street.json")
+    code, out, err = _run(capsys, "describe", str(path), "--robot", "1,1,0,0")
+    assert code == 0, err
+    for car in ("car-1", "car-2"):
+        line = next(t for t in out.splitlines() if f"({car})" in t and t.startswith("- "))
+        assert "unreachable: it lies outside the planning workspace" in line and "closed in" not in line
+    table = next(t for t in out.splitlines() if t.startswith("- table (table-1)"))
+    assert "sunk 0.44 m into the floor" in table and "float" not in out
+    hint = out.splitlines()[-1]
+    assert "2 objects (car-1, car-2) lie outside the planning workspace" in hint and "--bounds" in hint
+    bounds = hint.split("--bounds=")[1].rstrip(")")
+    code, out, err = _run(capsys, "describe", str(path), "--robot", "1,1,0,0", f"--bounds={bounds}", "--json")
+    assert code == 0, err
+    graph = json.loads(out)
+    jsonschema.validate(graph, SCENE_GRAPH_SCHEMA)
+    cars = [o for o in graph["objects"] if o["label"] == "car"]
+    assert [o["reach"]["mode"] for o in cars] == ["walk", "walk"]  # the suggested bounds hold them
+    table = next(o for o in graph["objects"] if o["id"] == "table-1")
+    assert table["placement"] == "below_floor" and table["floor_gap"] == pytest.approx(-0.44)

@@ -63,9 +63,9 @@ def test_box_on_a_table() -> None:
 
 def test_object_in_the_air_is_flagged_as_floating() -> None:
     g = _graph([_obj("lamp", "lamp", 1.0, 2.0, (0.3, 0.3, 0.3), z0=1.0)])
-    assert _o(g, "lamp")["on"] is None
+    assert _o(g, "lamp")["on"] is None and _o(g, "lamp")["placement"] == "floating"
     assert any("float" in u for u in g["uncertainties"])
-    assert "floating" in summarize(g)
+    assert "floating 1.00 m above the floor" in summarize(g)
 
 
 # --- a dog behind a line of boxes ------------------------------------------------------------------
@@ -119,6 +119,7 @@ def test_object_inside_a_closed_ring_to_the_ceiling_is_unreachable() -> None:
     g = _graph(objs)
     reach = _o(g, "dog")["reach"]
     assert reach["mode"] == "none" and reach["goal"] is None and "closed in" in reach["reason"]
+    assert reach["code"] == "closed_in"
     assert "unreachable" in summarize(g)
     with pytest.raises(ObjectGoalError, match="cannot be reached"):
         goal_beside(Scene(objects=tuple(objs)), build_grid(Scene(objects=tuple(objs))), "dog", FACING_Y[:3])
@@ -219,7 +220,9 @@ def test_schema_rejects_a_malformed_graph() -> None:
     with pytest.raises(jsonschema.ValidationError):
         jsonschema.validate(bad, SCENE_GRAPH_SCHEMA)
     with pytest.raises(jsonschema.ValidationError):
-        jsonschema.validate({**g, "version": 2}, SCENE_GRAPH_SCHEMA)
+        jsonschema.validate({**g, "version": 3}, SCENE_GRAPH_SCHEMA)
+    with pytest.raises(jsonschema.ValidationError):
+        jsonschema.validate({**g, "version": 1}, SCENE_GRAPH_SCHEMA)  # a version-1 graph has no placement
 
 
 def test_graph_without_robot_or_grid_is_valid_and_says_what_is_missing() -> None:
