@@ -58,31 +58,36 @@ def robot_from_captures(scene: Any) -> tuple[float, float, float, float] | None:
 
 
 def bounds_hint(graph: dict[str, Any], scene: Any, pad: float) -> str:
-    """A note for objects the graph marks ``outside_workspace``: how many, and ``--bounds`` (world
-    [m], rounded out to whole metres, ``pad`` [m] around every object and the robot, the z range
-    kept) that hold them; ``""`` when there are none."""
-    out = [o["id"] for o in graph["objects"] if (o.get("reach") or {}).get("code") == "outside_workspace"]
+    """A note when the robot or objects the graph marks ``outside_workspace`` lie outside the
+    planning workspace: which, and ``--bounds`` (world [m], rounded out to whole metres, ``pad``
+    [m] around every object and the robot, the z range kept or stretched to the robot) that hold
+    them all; ``""`` when nothing lies outside."""
     ws = graph.get("workspace")
-    if not out or not ws:
+    if not ws:
         return ""
-    lo, hi = list(ws["min"][:2]), list(ws["max"][:2])
-    pts = [o.position for o in scene.objects] + ([graph["robot"]["position"]] if graph.get("robot") else [])
-    for o in scene.objects:
-        r = math.hypot(o.size[0], o.size[2]) / 2 + pad
+    out = [o["id"] for o in graph["objects"] if (o.get("reach") or {}).get("code") == "outside_workspace"]
+    robot = (graph.get("robot") or {}).get("position")
+    robot_out = robot is not None and not all(ws["min"][a] <= robot[a] <= ws["max"][a] for a in range(3))
+    if not out and not robot_out:
+        return ""
+    lo, hi = list(ws["min"]), list(ws["max"])
+    for ctr, r in [(o.position, math.hypot(o.size[0], o.size[2]) / 2 + pad) for o in scene.objects] + \
+            ([(robot, pad)] if robot is not None else []):
         for a in (0, 1):
-            lo[a], hi[a] = min(lo[a], o.position[a] - r), max(hi[a], o.position[a] + r)
-    for p in pts:
-        for a in (0, 1):
-            lo[a], hi[a] = min(lo[a], p[a] - pad), max(hi[a], p[a] + pad)
-    b = [math.floor(lo[0]), math.floor(lo[1]), ws["min"][2], math.ceil(hi[0]), math.ceil(hi[1]), ws["max"][2]]
-    text = ",".join(f"{v:g}" for v in b)
-    n = len(out)
+            lo[a], hi[a] = min(lo[a], ctr[a] - r), max(hi[a], ctr[a] + r)
+    if robot_out and not ws["min"][2] <= robot[2] <= ws["max"][2]:
+        lo[2], hi[2] = min(lo[2], robot[2] - pad), max(hi[2], robot[2] + pad)
+    b = [math.floor(lo[0]), math.floor(lo[1]), lo[2] if lo[2] == ws["min"][2] else math.floor(lo[2]),
+         math.ceil(hi[0]), math.ceil(hi[1]), hi[2] if hi[2] == ws["max"][2] else math.ceil(hi[2])]
+    n = len(out) + robot_out
     w = (f"x {ws['min'][0]:g} to {ws['max'][0]:g} m, y {ws['min'][1]:g} to {ws['max'][1]:g} m, "
          f"z {ws['min'][2]:g} to {ws['max'][2]:g} m")
-    return (f"({n} object{'' if n == 1 else 's'} ({', '.join(out[:5])}{', ...' if n > 5 else ''}) "
-            f"{'lies' if n == 1 else 'lie'} outside the planning workspace ({w}), so "
-            f"{'it is' if n == 1 else 'they are'} unreachable here: give one that holds "
-            f"{'it' if n == 1 else 'them'} with --bounds xmin,ymin,zmin,xmax,ymax,zmax, e.g. --bounds={text})")
+    objects = (f"{len(out)} object{'' if len(out) == 1 else 's'} ({', '.join(out[:5])}{', ...' if len(out) > 5 else ''})"
+               if out else "")
+    subject = " and ".join(x for x in ("the robot" if robot_out else "", objects) if x)
+    return (f"({subject} {'lies' if n == 1 else 'lie'} outside the planning workspace ({w}): "
+            f"give one that holds {'it' if n == 1 else 'them'} with --bounds xmin,ymin,zmin,xmax,ymax,zmax, "
+            f"e.g. --bounds={','.join(f'{v:g}' for v in b)})")
 
 
 def describe(args: argparse.Namespace) -> tuple[str, dict[str, Any]]:

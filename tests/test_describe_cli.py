@@ -171,3 +171,19 @@ def test_describe_far_objects_points_to_bounds_and_sunk_ones_are_below_the_floor
     assert [o["reach"]["mode"] for o in cars] == ["walk", "walk"]  # the suggested bounds hold them
     table = next(o for o in graph["objects"] if o["id"] == "table-1")
     assert table["placement"] == "below_floor" and table["floor_gap"] == pytest.approx(-0.44)
+
+
+def test_describe_robot_outside_the_workspace_points_to_bounds(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    scene = Scene(objects=(SceneObject("chair-1", "office_chair", (2.5, 3.0, 0.5), (0.6, 1.0, 0.6)),))
+    path = scene.save(tmp_path / "s.json")
+    code, out, err = _run(capsys, "describe", str(path), "--robot", "-3,1,0,0")
+    assert code == 0, err
+    assert "reachability unknown: robot (-3.00, 1.00, 0.00) is outside the workspace" in out
+    hint = out.splitlines()[-1]
+    assert hint.startswith("(the robot lies outside the planning workspace") and "--bounds=" in hint
+    bounds = hint.split("--bounds=")[1].rstrip(")")
+    code, out, err = _run(capsys, "describe", str(path), "--robot", "-3,1,0,0", f"--bounds={bounds}")
+    assert code == 0, err
+    assert "reachable by walking" in out and "outside the planning workspace" not in out
+    code, out, _ = _run(capsys, "describe", str(path), "--robot", "2.5,1,0,90")  # inside: no note
+    assert "--bounds" not in out and "outside" not in out
