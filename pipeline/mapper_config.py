@@ -252,18 +252,28 @@ SECOND_DETECTORS = ("oidv4_ssd",)
 """Detectors that can run beside a set's own (``--models offline+oidv4_ssd``), merged class-aware."""
 
 
-def _with_second_detector(det: Any, name: str, model_dir: str | os.PathLike[str] | None, catalog: Catalog) -> Any:
+def _with_second_detector(det: Any, name: str, model_dir: str | os.PathLike[str] | None, catalog: Catalog,
+                          set_name: str = "offline") -> Any:
     """``det`` merged with the second detector ``name`` (:class:`pipeline.models.ssd.MergedDetector`).
 
     The second detector is a registry model found like every other (``--model-dir``, else
     ``$MORPHONAVI_MODELS`` / the user cache, then ``../shared/models``); missing, the error names
-    ``morphonavi models fetch NAME``."""
+    ``morphonavi models fetch NAME``; present but broken (does not load), it names the re-fetch and
+    ``--models SET-NAME`` (``set_name``: run without it)."""
+    from pipeline.models.base import ModelError, ModelMissingError
     from pipeline.models.loader import load_model
     from pipeline.models.ssd import MergedDetector
 
     if name not in SECOND_DETECTORS:
         raise MapperError(f"--models ...+{name}: unknown second detector (known: {', '.join(SECOND_DETECTORS)})")
-    second = load_model(name, model_dir, threads=1)
+    try:
+        second = load_model(name, model_dir, threads=1)
+    except ModelMissingError:
+        raise
+    except ModelError as exc:
+        raise ModelError(f"second detector {name!r}: {exc}; re-fetch it with: morphonavi models fetch {name} "
+                         f"(check with: morphonavi models verify {name}), or run without it: "
+                         f"--models {set_name}-{name}") from None
     second.label_map = {l: e.name for l in second.labels[1:] if (e := catalog.lookup(l)) is not None}
     return MergedDetector(det, second)
 
@@ -347,7 +357,7 @@ def load_mapping_models(
                 mapping[label] = entry.name
         det.label_map = mapping
     if extra:
-        merged = _with_second_detector(det, extra, model_dir, catalog)
+        merged = _with_second_detector(det, extra, model_dir, catalog, set_name)
         if policy != "union":
             merged = MergedDetector(*merged.members, policy="class_aware", second_owns=SECOND_OWNS.get(extra, ()))
         det = merged

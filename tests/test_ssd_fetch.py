@@ -255,7 +255,10 @@ def test_fetch_extracts_byte_ranges_converts_and_checks(fake: dict, server: File
     assert [f.checksum for f in files] == ["published", "published"]
     assert (folder / "labelmap.txt").read_bytes() == LABELS
     assert (folder / "oidv4_ssd.onnx").read_bytes() == Path(fake["reference"]).read_bytes()
-    assert sorted(p.name for p in folder.iterdir()) == ["labelmap.txt", "oidv4_ssd.onnx"]  # no .part, no archive
+    # No .part, no archive, no lock; the installed ONNX's sha256 is recorded (a later change is then seen).
+    assert sorted(p.name for p in folder.iterdir()) == [CHECKSUMS_FILE, "labelmap.txt", "oidv4_ssd.onnx"]
+    assert registry.recorded_checksums(folder) == {"oidv4_ssd.onnx": fake["onnx_sha"]}
+    assert any(f"recorded sha256 {fake['onnx_sha']} in {folder / CHECKSUMS_FILE}" in m for m in messages)
     assert [p for p, _ in server.log] == ["/@mediapipe/objectron/-/objectron-0.4.1675468480.tgz"]  # one download
     assert any("converting (raw_onnx)" in m for m in messages)
     # The fetched folder loads through the registry like any model, and the detector runs.
@@ -301,7 +304,9 @@ def test_other_conversion_bytes_are_kept_only_when_outputs_match(fake: dict, tmp
     assert recorded == {"oidv4_ssd.onnx": fake["onnx_sha"]}
     assert registry.expected_sha256(spec, spec.files[0], tmp_path / "ok" / "oidv4_ssd") == (
         fake["onnx_sha"], "recorded at conversion")
-    # A present file re-saved with other bytes but the same graph is kept (no download); a broken one is not.
+    # A present file re-saved with other bytes but the same graph: with a record of what was fetched it is
+    # "modified since it was fetched" and made again; without one (first use) its outputs decide and it is
+    # recorded; a broken one is made again.
     import onnx
 
     path = tmp_path / "ok" / "oidv4_ssd" / "oidv4_ssd.onnx"
@@ -309,8 +314,14 @@ def test_other_conversion_bytes_are_kept_only_when_outputs_match(fake: dict, tmp
     resaved.producer_name = "another converter"
     onnx.save(resaved, str(path))
     again, _ = fetch(spec, tmp_path / "ok", progress=False, log=messages.append)
+    assert again.downloaded and again.sha256 == fake["onnx_sha"] == sha(path.read_bytes())
+    assert any("oidv4_ssd.onnx: modified since it was fetched" in m for m in messages)
+    onnx.save(resaved, str(path))
+    (path.parent / CHECKSUMS_FILE).unlink()
+    again, _ = fetch(spec, tmp_path / "ok", progress=False, log=messages.append)
     assert (again.downloaded, again.checksum, again.sha256) == (False, "outputs match reference", sha(path.read_bytes()))
     assert registry.recorded_checksums(path.parent) == {"oidv4_ssd.onnx": sha(path.read_bytes())}
+    (path.parent / CHECKSUMS_FILE).unlink()
     path.write_bytes(b"not a model")
     again, _ = fetch(spec, tmp_path / "ok", progress=False, log=messages.append)
     assert again.downloaded and path.read_bytes() != b"not a model"
@@ -326,7 +337,7 @@ def test_other_conversion_bytes_are_kept_only_when_outputs_match(fake: dict, tmp
                                                  spec.files[1]))
     again, _ = fetch(published, tmp_path / "ok", progress=False, log=messages.append)
     assert again.downloaded and again.checksum == "published" and again.sha256 == fake["onnx_sha"]
-    assert registry.recorded_checksums(path.parent) == {}
+    assert registry.recorded_checksums(path.parent) == {"oidv4_ssd.onnx": fake["onnx_sha"]}  # what it installed
     # Outputs that differ from the reference are refused, and nothing stays.
     wrong = {k: tuple(v + 1.0 for v in vals) for k, vals in PROBE.items()}
     monkeypatch.setattr(sys.modules[__name__], "PROBE", wrong)

@@ -75,6 +75,10 @@ def models_fetch(
             failed += 1
             log(f"error: {name}: {exc}")
             continue
+        except OSError as exc:  # a file-system failure fetch did not foresee: one line, no traceback
+            failed += 1
+            log(f"error: {name}: {exc.strerror or exc}: {getattr(exc, 'filename', '') or dest / name}")
+            continue
         log(f"{name}: {len(files)} file(s) ready in {dest / name}")
     return 1 if failed else 0
 

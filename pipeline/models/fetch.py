@@ -13,6 +13,7 @@ later fetches / ``verify`` check against it.
 from __future__ import annotations
 
 import base64
+import errno
 import hashlib
 import http.client
 import json
@@ -27,6 +28,7 @@ from pathlib import Path
 from typing import Callable
 
 from pipeline.models.base import ModelError
+from pipeline.models.fetch_lock import FetchLock
 from pipeline.models.registry import (
     CHECKSUMS_FILE,
     MODELS_ENV,
@@ -42,7 +44,7 @@ from pipeline.models.registry import (
 
 CHUNK = 1 << 20
 USER_AGENT = "morphonavi-models/0.1"
-_ELSEWHERE = f"choose another directory with --dir or ${MODELS_ENV}"
+_ELSEWHERE = f"choose a writable models directory with --dir DIR (or --model-dir DIR) or ${MODELS_ENV}"
 
 Log = Callable[[str], None]
 
@@ -87,7 +89,7 @@ def download(
     try:
         target.parent.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
-        raise ModelError(f"cannot create {target.parent}: {exc}; {_ELSEWHERE}") from exc
+        raise ModelError(f"cannot create {target.parent} ({exc.strerror or exc}): {_ELSEWHERE}") from None
     offset = part.stat().st_size if part.is_file() else 0
     if size is not None and offset > size:
         part.unlink()
@@ -135,9 +137,9 @@ def download(
                                 break
                             f.write(block)
                             bar.update(len(block))
-                except PermissionError as exc:
-                    raise ModelError(f"cannot write {part}: {exc}; {_ELSEWHERE}") from exc
                 except (OSError, http.client.HTTPException) as exc:
+                    if isinstance(exc, OSError) and exc.errno in _READ_ONLY:
+                        raise ModelError(f"cannot write to {part.parent} ({exc.strerror or exc}): {_ELSEWHERE}") from None
                     got = part.stat().st_size if part.exists() else 0
                     raise ModelError(
                         f"download of {url} interrupted after {got} bytes: {exc}; run the command again to resume"
@@ -170,10 +172,21 @@ def _content_range_total(value: str) -> int | None:
 
 
 _FIRST_DOWNLOAD = "recorded on first download (no published checksum)"
-_CONVERTED = "converted with another toolchain; the outputs match the reference conversion's"
+_CONVERTED = "converted with another toolchain; the outputs matched the reference conversion's"
+_FIRST_USE = "present without a record (first use); the outputs matched the reference conversion's"
+_REFERENCE = "the reference conversion's bytes (pinned sha256)"
+_READ_ONLY = (errno.EACCES, errno.EPERM, errno.EROFS)
 
 
-def _record(folder: Path, file: ModelFile, sha: str, origin: str = _FIRST_DOWNLOAD) -> None:
+def _not_writable(folder: Path, exc: OSError) -> ModelError:
+    """The one error line of a fetch that must write into a folder it cannot write."""
+    return ModelError(f"cannot write to {folder} ({exc.strerror or exc}): {_ELSEWHERE}")
+
+
+def _record(folder: Path, file: ModelFile, sha: str, origin: str, log: Log, label: str) -> bool:
+    """Record ``sha`` for ``file`` in ``folder/checksums.json`` (trust on first use), saying so on the
+    console. Best-effort: a folder that cannot be written is reported, not an error. Returns whether it
+    was recorded."""
     path = folder / CHECKSUMS_FILE
     data: dict[str, object] = {}
     if path.is_file():
@@ -184,21 +197,20 @@ def _record(folder: Path, file: ModelFile, sha: str, origin: str = _FIRST_DOWNLO
             data = {}
     data[file.path] = {"sha256": sha, "url": file.url, "origin": origin}
     tmp = path.with_name(path.name + ".tmp")
-    tmp.write_text(json.dumps(data, indent=1, sort_keys=True) + "\n", encoding="utf-8")
-    os.replace(tmp, path)
-
-
-def _forget(folder: Path, name: str) -> None:
-    path = folder / CHECKSUMS_FILE
     try:
-        data = json.loads(path.read_text(encoding="utf-8"))
-    except (OSError, json.JSONDecodeError):
-        return
-    if isinstance(data, dict) and name in data:
-        del data[name]
-        tmp = path.with_name(path.name + ".tmp")
         tmp.write_text(json.dumps(data, indent=1, sort_keys=True) + "\n", encoding="utf-8")
         os.replace(tmp, path)
+    except OSError as exc:
+        try:
+            tmp.unlink(missing_ok=True)
+        except OSError:
+            pass
+        log(f"{label}: could not record sha256 {sha} in {path} ({exc.strerror or exc}); the file is used as is "
+            "(nothing recorded: later fetches and verifies check it again as on first use)")
+        return False
+    why = "no published checksum; " if origin == _FIRST_DOWNLOAD else ""
+    log(f"{label}: {why}recorded sha256 {sha} in {path} ({origin}); later fetches and verifies compare against it")
+    return True
 
 
 def _stale(file: ModelFile, folder: Path) -> bool:
@@ -232,9 +244,19 @@ def fetch(
     downloaded archive; a partial archive ``.part`` stays for resuming). Returns the files with
     their sha256.
 
+    One fetch per folder at a time (:class:`pipeline.models.fetch_lock.FetchLock`): a second one waits,
+    saying for which PID. A folder that cannot be written is fine as long as nothing must be written
+    (present, checked files; recording a checksum is then skipped with a message); otherwise one
+    :class:`ModelError` names the folder and how to choose another.
+
+    A converted file (``oidv4_ssd.onnx``) is checked against the pinned sha256, else against the sha256
+    recorded for it in ``checksums.json`` (every fetch records the bytes it installs): other bytes are
+    "modified since it was fetched" and are re-created. Only a file without a record (first use, e.g. a
+    copy made elsewhere) is accepted by its outputs on a fixed probe, and then recorded.
+
     Raises:
         ModelError: Unknown model, a cloud model (nothing to fetch), any download, checksum or
-            conversion failure (a missing converter names how to install it).
+            conversion failure (a missing converter names how to install it), an unwritable folder.
     """
     spec = get_spec(name) if isinstance(name, str) else name
     if spec.remote:
@@ -246,7 +268,22 @@ def fetch(
     try:
         folder.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
-        raise ModelError(f"cannot create {folder}: {exc}; {_ELSEWHERE}") from exc
+        raise ModelError(f"cannot create {folder} ({exc.strerror or exc}): {_ELSEWHERE}") from None
+    try:
+        with FetchLock(folder, spec.name, log):
+            return _fetch_into(spec, folder, progress, log, timeout, force)
+    except OSError as exc:
+        if exc.errno in _READ_ONLY:
+            raise _not_writable(folder, exc) from None
+        raise
+    finally:
+        if not existed:
+            _remove_if_empty(folder)
+
+
+def _fetch_into(spec: ModelSpec, folder: Path, progress: bool, log: Log, timeout: float,
+                force: bool) -> list[FetchedFile]:
+    """:func:`fetch` once ``folder`` exists and is locked."""
     results: list[FetchedFile] = []
     archives: dict[str, Path] = {}
     staged: list[tuple[Path, Path]] = []  # (.part, target) renamed together at the end
@@ -254,26 +291,20 @@ def fetch(
     try:
         for file in spec.files:
             target = folder / file.path
+            label = f"{spec.name}/{file.path}"
             known = _known_sha256(file, folder)
             if target.is_file() and not force:
-                actual = sha256_file(target)
-                if file.convert is not None and actual == file.sha256:
-                    known = actual  # the reference conversion's bytes, whatever an older record says
-                if known is None or actual == known:
-                    origin = _origin(known, file)
-                    if known is None:
-                        _record(folder, file, actual)
-                        log(f"{spec.name}/{file.path}: present; no published checksum, recorded sha256 {actual}")
-                    else:
-                        log(f"{spec.name}/{file.path}: present, sha256 ok")
+                kept = _check_present(file, target, log, label)
+                if kept is not None:
+                    actual, origin, why = kept
+                    if why:
+                        records.append((file, actual, why))
                     results.append(FetchedFile(target, actual, False, origin))
                     continue
-                if file.convert is not None and _outputs_match(file, target, log):
-                    _record(folder, file, actual, _CONVERTED)
-                    results.append(FetchedFile(target, actual, False, "outputs match reference"))
-                    continue
-                log(f"{spec.name}/{file.path}: checksum differs from the expected one; downloading again")
-                target.unlink()
+                try:
+                    target.unlink()
+                except OSError as exc:
+                    raise _not_writable(folder, exc) from None
             if file.member is not None:
                 archive = archives.get(file.url)
                 if archive is None:
@@ -287,13 +318,15 @@ def fetch(
                 part, actual, origin = _extract(archive, file, target, known, log)
                 staged.append((part, target))
             else:
-                log(f"{spec.name}/{file.path}: downloading {file.url}")
+                log(f"{label}: downloading {file.url}")
                 actual = download(file.url, target, sha256=known, size=file.size, progress=progress, timeout=timeout)
                 origin = _origin(known, file)
             if origin == "recorded":
                 records.append((file, actual, _FIRST_DOWNLOAD))
             elif origin == "outputs match reference":
                 records.append((file, actual, _CONVERTED))
+            elif file.convert is not None and recorded_checksums(folder).get(file.path) != actual:
+                records.append((file, actual, _REFERENCE))
             results.append(FetchedFile(target, actual, True, origin))
         for part, target in staged:
             os.replace(part, target)
@@ -304,20 +337,43 @@ def fetch(
         for archive in archives.values():  # complete archives go; a partial .part stays for resuming
             archive.unlink(missing_ok=True)
         _remove_if_empty(folder / ".download")
-        if not existed:
-            _remove_if_empty(folder)
         raise
-    for file, sha, origin in records:
-        _record(folder, file, sha, origin)
-    for file, result in zip(spec.files, results):  # a converted file with the reference bytes: an old record goes
-        if file.convert is not None and result.checksum == "published":
-            _forget(folder, file.path)
-        if origin.startswith("recorded"):
-            log(f"{spec.name}/{file.path}: no published checksum; recorded sha256 {sha} in "
-                f"{folder / CHECKSUMS_FILE} (later verifies compare against it)")
+    for file, sha, why in records:
+        _record(folder, file, sha, why, log, f"{spec.name}/{file.path}")
     if archives:  # only on success: a failed archive download stays resumable
         shutil.rmtree(folder / ".download", ignore_errors=True)
     return results
+
+
+def _check_present(file: ModelFile, target: Path, log: Log, label: str) -> tuple[str, str, str] | None:
+    """A present file: ``(sha256, origin, why to record it or "")`` when it is kept, ``None`` when it must
+    be fetched again (the reason is logged). Writes nothing."""
+    folder = target.parent
+    actual = sha256_file(target)
+    recorded = recorded_checksums(folder).get(file.path)
+    if file.convert is None:
+        known = file.sha256 or recorded
+        if known is None:
+            log(f"{label}: present; no published checksum")
+            return actual, "recorded", _FIRST_DOWNLOAD
+        if actual == known:
+            log(f"{label}: present, sha256 ok")
+            return actual, _origin(known, file), ""
+        log(f"{label}: sha256 {actual} differs from the expected {known}; downloading again")
+        return None
+    if actual == file.sha256:  # the reference conversion's bytes, whatever an older record says
+        log(f"{label}: present, sha256 ok")
+        return actual, "published", (_REFERENCE if recorded != actual else "")
+    if recorded is not None:
+        if actual == recorded:
+            log(f"{label}: present, sha256 ok (as recorded when it was fetched)")
+            return actual, "matches record", ""
+        log(f"{label}: modified since it was fetched (sha256 {actual}, recorded {recorded}); making it again")
+        return None
+    if _outputs_match(file, target, log):
+        return actual, "outputs match reference", _FIRST_USE
+    log(f"{label}: making it again")
+    return None
 
 
 def _outputs_match(file: ModelFile, target: Path, log: Log) -> bool:
@@ -327,8 +383,8 @@ def _outputs_match(file: ModelFile, target: Path, log: Log) -> bool:
     except ModelError as exc:
         log(f"{target.parent.name}/{target.name}: {exc}")
         return False
-    log(f"{target.parent.name}/{target.name}: present; sha256 differs from the reference conversion's but the "
-        f"outputs match it (largest relative difference {worst:.1e}): kept, sha256 recorded")
+    log(f"{target.parent.name}/{target.name}: present without a recorded sha256 (first use); its sha256 differs "
+        f"from the reference conversion's but the outputs match it (largest relative difference {worst:.1e}): kept")
     return True
 
 

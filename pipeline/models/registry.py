@@ -149,8 +149,8 @@ def recorded_checksums(folder: Path) -> dict[str, str]:
 def expected_sha256(spec: ModelSpec, file: ModelFile, folder: Path) -> tuple[str | None, str]:
     """``(sha256, origin)``: the published checksum, else the one recorded on first download.
 
-    A converted file's record comes first: it is written only when another toolchain produced other
-    bytes whose outputs matched the reference conversion's (:func:`pipeline.models.fetch.fetch`)."""
+    A converted file's record comes first: :func:`pipeline.models.fetch.fetch` records the bytes it
+    installs (the reference conversion's, or another toolchain's whose outputs matched them)."""
     if file.convert and (rec := recorded_checksums(folder).get(file.path)):
         return rec, "recorded at conversion"
     if file.sha256:
@@ -177,16 +177,21 @@ class ModelStatus:
     description: str
     missing: tuple[str, ...] = ()
     note: str = ""
+    size_issue: str = ""
+    """Present files whose size is not the registry's (``""`` when none), e.g. a truncated download."""
 
     def as_row(self) -> dict[str, str]:
-        """Printable columns."""
-        size = "?" if self.size is None else (f"{self.size / 1e6:.1f} MB" if self.size >= 1e5 else f"{self.size} B")
+        """Printable columns; ``size`` is the files' on disk when present, else the registry's."""
+        size = "?" if self.size is None else _size_text(self.size)
         if self.status == "missing":
             where = f"run: {FETCH_COMMAND} {self.name}"
         elif self.status == "api":
             where = self.note
         else:
             where = str(self.location)
+        if self.size_issue:
+            size += " (size differs!)"
+            where += f"; {self.size_issue}; run: morphonavi models verify {self.name}"
         return {
             "name": self.name,
             "role": self.role,
@@ -211,13 +216,39 @@ def list_models(model_dir: Path | str | None = None) -> list[ModelStatus]:
             continue
         folder = locate(spec.name, model_dir)
         primary = search_dirs(model_dir)[0] / spec.name
+        size, issue = (spec.size, "") if folder is None else _sizes_on_disk(spec, folder)
         rows.append(
             ModelStatus(
-                spec.name, spec.role, spec.backend, sets, "present" if folder else "missing", folder, spec.size,
+                spec.name, spec.role, spec.backend, sets, "present" if folder else "missing", folder, size,
                 spec.licence, spec.description, () if folder else tuple(missing_files(spec, primary)),
+                size_issue=issue,
             )
         )
     return rows
+
+
+CONVERTED_SIZE_TOLERANCE = 0.01
+"""A converted file's size may differ from the reference conversion's by this fraction (another onnx
+version serialises a few hundred bytes differently: the ``../shared/models`` SSD has 492 bytes fewer)."""
+
+
+def _size_text(size: int) -> str:
+    return f"{size / 1e6:.1f} MB" if size >= 1e5 else f"{size} B"
+
+
+def _sizes_on_disk(spec: ModelSpec, folder: Path) -> tuple[int, str]:
+    """``(total bytes on disk, size mismatches)`` of a present model's files, checked against the sizes
+    the registry knows (exactly; a converted file within :data:`CONVERTED_SIZE_TOLERANCE`)."""
+    total, issues = 0, []
+    for f in spec.files:
+        got = (folder / f.path).stat().st_size
+        total += got
+        if f.size is None:
+            continue
+        off = abs(got - f.size) > (CONVERTED_SIZE_TOLERANCE * f.size if f.convert else 0)
+        if off:
+            issues.append(f"{f.path} has {got} bytes, expected {f.size}")
+    return total, ", ".join(issues)
 
 
 def format_table(rows: Sequence[Mapping[str, str]]) -> str:
@@ -267,21 +298,16 @@ def verify(
         ok = True
         for f in spec.files:
             path = folder / f.path
-            if check_hashes:
+            if check_hashes and f.convert:
+                problem = _converted_problem(name, f, folder, messages)
+                if problem:
+                    ok = False
+                    messages.append(problem)
+            elif check_hashes:
                 sha, origin = expected_sha256(spec, f, folder)
                 if sha is not None:
                     actual = sha256_file(path)
-                    if f.convert and actual == f.sha256:
-                        pass  # the reference conversion's bytes
-                    elif actual != sha and f.convert:  # another conversion of the same weights: compare outputs
-                        try:
-                            worst = converter(f.convert)[1](path)
-                            messages.append(f"{f.path}: sha256 differs from the reference conversion's; outputs "
-                                            f"match it (largest relative difference {worst:.1e})")
-                        except ModelError as exc:
-                            ok = False
-                            messages.append(f"{f.path}: sha256 {actual} differs from the {origin} {sha}; {exc}")
-                    elif actual != sha:
+                    if actual != sha:
                         ok = False
                         messages.append(f"{f.path}: sha256 {actual} differs from the {origin} {sha}")
                 else:
@@ -296,3 +322,24 @@ def verify(
             messages.insert(0, f"{len(spec.files)} file(s) ok")
         results.append(VerifyResult(name, ok, folder, tuple(messages)))
     return results
+
+
+def _converted_problem(name: str, f: ModelFile, folder: Path, notes: list[str]) -> str:
+    """What is wrong with a converted file (``""`` when nothing): the pinned sha256 (the reference
+    conversion) or the one recorded when it was fetched must match; a file without a record (first use,
+    a copy made elsewhere) is checked by its outputs on a fixed probe (a note goes to ``notes``)."""
+    path = folder / f.path
+    actual = sha256_file(path)
+    recorded = recorded_checksums(folder).get(f.path)
+    if actual == f.sha256 or (recorded is not None and actual == recorded):
+        return ""
+    if recorded is not None:
+        return (f"{f.path}: modified since it was fetched (sha256 {actual}, recorded {recorded} in "
+                f"{folder / CHECKSUMS_FILE}); run: {FETCH_COMMAND} {name}")
+    try:
+        worst = converter(f.convert or "")[1](path)
+    except ModelError as exc:
+        return f"{f.path}: sha256 {actual} differs from the reference conversion's {f.sha256}; {exc}"
+    notes.append(f"{f.path}: no recorded sha256 (first use): sha256 differs from the reference conversion's; "
+                 f"outputs match it (largest relative difference {worst:.1e}); {FETCH_COMMAND} {name} records it")
+    return ""
