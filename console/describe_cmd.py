@@ -82,8 +82,8 @@ def bounds_hint(graph: dict[str, Any], scene: Any, pad: float) -> str:
     n = len(out) + robot_out
     w = (f"x {ws['min'][0]:g} to {ws['max'][0]:g} m, y {ws['min'][1]:g} to {ws['max'][1]:g} m, "
          f"z {ws['min'][2]:g} to {ws['max'][2]:g} m")
-    objects = (f"{len(out)} object{'' if len(out) == 1 else 's'} ({', '.join(out[:5])}{', ...' if len(out) > 5 else ''})"
-               if out else "")
+    ids = ", ".join(out[:5]) + (", ..." if len(out) > 5 else "")
+    objects = f"{len(out)} object{'' if len(out) == 1 else 's'} ({ids})" if out else ""
     subject = " and ".join(x for x in ("the robot" if robot_out else "", objects) if x)
     return (f"({subject} {'lies' if n == 1 else 'lie'} outside the planning workspace ({w}): "
             f"give one that holds {'it' if n == 1 else 'them'} with --bounds xmin,ymin,zmin,xmax,ymax,zmax, "

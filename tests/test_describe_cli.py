@@ -173,7 +173,8 @@ def test_describe_far_objects_points_to_bounds_and_sunk_ones_are_below_the_floor
     assert table["placement"] == "below_floor" and table["floor_gap"] == pytest.approx(-0.44)
 
 
-def test_describe_robot_outside_the_workspace_points_to_bounds(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+def test_describe_robot_outside_the_workspace_points_to_bounds(tmp_path: Path,
+                                                              capsys: pytest.CaptureFixture[str]) -> None:
     scene = Scene(objects=(SceneObject("chair-1", "office_chair", (2.5, 3.0, 0.5), (0.6, 1.0, 0.6)),))
     path = scene.save(tmp_path / "s.json")
     code, out, err = _run(capsys, "describe", str(path), "--robot", "-3,1,0,0")
