@@ -39,7 +39,8 @@ def resolve_stop(stop: Any, scene: Any, route: Any) -> Sequence[float]:
     try:
         obj, app = goal_beside(scene, route.grid, str(stop), route.last_node(), route)
     except ObjectGoalError as exc:
-        raise CliError(f"--goal-object {str(stop)!r}: {exc}") from None
+        msg = str(exc).replace("widen the workspace to plan there", "widen the workspace with --bounds to plan there")
+        raise CliError(f"--goal-object {str(stop)!r}: {msg}") from None
     how = {"walk": "by walking", "fly": "only by flying"}.get(app.mode, app.mode)
     g = app.goal
     print(f"goal object {str(stop)!r}: {obj.label} {obj.id!r}, stop at ({g[0]:.2f}, {g[1]:.2f}, {g[2]:.2f}) "

@@ -188,3 +188,12 @@ def test_describe_robot_outside_the_workspace_points_to_bounds(tmp_path: Path,
     assert "reachable by walking" in out and "outside the planning workspace" not in out
     code, out, _ = _run(capsys, "describe", str(path), "--robot", "2.5,1,0,90")  # inside: no note
     assert "--bounds" not in out and "outside" not in out
+
+
+def test_plan_goal_object_outside_the_workspace_names_bounds(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    scene = Scene(objects=(SceneObject("car-1", "car", (58.0, 3.0, 0.75), (1.8, 1.5, 4.5)),))
+    path = scene.save(tmp_path / "street.json")
+    code, _, err = _run(capsys, "plan", str(path), "--start", "1,1,0", "--goal-object", "car",
+                        "--out", str(tmp_path / "m.json"))
+    assert code == 2 and "outside the planning workspace" in err and "widen the workspace with --bounds" in err, err
+    assert not (tmp_path / "m.json").exists()
