@@ -6,8 +6,10 @@ and sha256, then renames the file into place. :func:`fetch` downloads every file
 (extracting members of ``.tgz`` archives for npm-hosted weights, or a byte range of one, converted
 when the registry says so: MediaPipe's SSD TFLite becomes ONNX through
 :mod:`pipeline.models.ssd_convert`). Files without a published
-checksum get their sha256 recorded in ``checksums.json`` on first download (trust on first use), and
-later fetches / ``verify`` check against it.
+checksum get their sha256 recorded in ``checksums.json`` on first download (trust on first use, said on
+the console; best-effort in a folder that cannot be written), and later fetches / ``verify`` check
+against it; a converted file's installed bytes are recorded too. One fetch per model folder at a time
+(:mod:`pipeline.models.fetch_lock`).
 """
 
 from __future__ import annotations
