@@ -14,21 +14,19 @@ against it; a converted file's installed bytes are recorded too. One fetch per m
 
 from __future__ import annotations
 
-import base64
 import errno
-import hashlib
 import http.client
 import json
 import os
 import re
 import shutil
-import tarfile
 import urllib.error
 import urllib.request
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable
 
+from pipeline.models.archive import check_integrity, copy_member
 from pipeline.models.base import ModelError
 from pipeline.models.fetch_lock import FetchLock
 from pipeline.models.registry import (
@@ -395,57 +393,11 @@ def _origin(known: str | None, file: ModelFile) -> str:
     return "recorded" if known is None else ("published" if known == file.sha256 else "matches record")
 
 
-def check_integrity(path: Path, integrity: str) -> None:
-    """Check a file against a Subresource-Integrity string (``sha512-<base64>``, as npm's ``dist.integrity``).
-
-    Raises:
-        ModelError: Unknown algorithm or a mismatch (the caller deletes the file).
-    """
-    algo, _, expected = integrity.partition("-")
-    if algo not in ("sha256", "sha384", "sha512") or not expected:
-        raise ModelError(f"unsupported integrity string {integrity!r} (expected sha512-<base64>)")
-    h = hashlib.new(algo)
-    with open(path, "rb") as f:
-        for block in iter(lambda: f.read(CHUNK), b""):
-            h.update(block)
-    actual = base64.b64encode(h.digest()).decode("ascii")
-    if actual != expected:
-        raise ModelError(f"integrity mismatch for {path.name}: {algo}-{actual}, npm publishes {integrity}; "
-                         "nothing was installed")
-
-
 def _remove_if_empty(folder: Path) -> None:
     try:
         folder.rmdir()
     except OSError:
         pass  # not empty, or already gone
-
-
-def _copy_member(archive: Path, file: ModelFile, out_path: Path) -> None:
-    """The bytes of ``file.member`` (or its ``byte_range``) of a ``.tgz`` archive into ``out_path``."""
-    try:
-        with tarfile.open(archive, "r:*") as tar:
-            try:
-                member = tar.getmember(file.member or "")
-            except KeyError:
-                raise ModelError(f"{archive.name} has no member {file.member!r}") from None
-            src = tar.extractfile(member)
-            if src is None:
-                raise ModelError(f"{archive.name}: member {file.member!r} is not a regular file")
-            start, end = file.byte_range if file.byte_range is not None else (0, member.size)
-            if not 0 <= start < end <= member.size:
-                raise ModelError(f"{file.member} in {archive.name} has {member.size} bytes: no bytes {start}..{end}")
-            with src, open(out_path, "wb") as out:
-                src.seek(start)
-                left = end - start
-                while left > 0:
-                    block = src.read(min(CHUNK, left))
-                    if not block:
-                        raise ModelError(f"{file.member} in {archive.name} ends before byte {end}")
-                    out.write(block)
-                    left -= len(block)
-    except (tarfile.TarError, EOFError, OSError) as exc:
-        raise ModelError(f"cannot read archive {archive.name}: {exc}") from exc
 
 
 def _extract(archive: Path, file: ModelFile, target: Path, sha256: str | None, log: Log) -> tuple[Path, str, str]:
@@ -462,7 +414,7 @@ def _extract(archive: Path, file: ModelFile, target: Path, sha256: str | None, l
     where = f"{file.member}" + (f" bytes {file.byte_range[0]}..{file.byte_range[1]}" if file.byte_range else "")
     origin = _origin(sha256, file)
     try:
-        _copy_member(archive, file, raw)
+        copy_member(archive, file, raw)
         expected_size = file.size if file.convert is None else None
         if file.byte_range is not None:
             expected_size = file.byte_range[1] - file.byte_range[0]
