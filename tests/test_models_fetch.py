@@ -216,3 +216,10 @@ def test_cli_fetch_by_name_and_set(server: FileServer, tmp_path: Path, monkeypat
     assert "unknown model 'nope'" in log[-1]
     assert cli_support.models_fetch(["grounding_dino_cloud"], tmp_path, log=log.append) == 1
     assert "nothing to fetch" in log[-1]
+
+
+def test_fetching_the_offline_set_gets_the_detector_that_runs_beside_it() -> None:
+    from pipeline.models import cli_support
+
+    assert cli_support.expand_names(["offline"]) == ["yolox_nano", "mobilesam", "fastdepth", "oidv4_ssd"]
+    assert "oidv4_ssd" not in cli_support.expand_names(["default"])

@@ -182,7 +182,7 @@ def test_missing_tflite2onnx_is_one_clear_error(tmp_path: Path, monkeypatch: pyt
     with pytest.raises(ModelError) as err:
         ssd_convert.convert_tflite(tmp_path / "x.tflite", target)
     assert str(err.value) == ("converting the TFLite model needs tflite2onnx: pip install 'tflite2onnx==0.4.1' "
-                              "(in a checkout: pip install -e '.[ssd-convert]')")
+                              "(a dependency of morphonavi: reinstall it, e.g. pip install -e .)")
     assert not target.exists()
 
 
@@ -368,7 +368,7 @@ def test_missing_converter_through_fetch_and_cli(fake: dict, server: FileServer,
     assert cli_support.models_fetch(["oidv4_ssd"], tmp_path / "cli", progress=False, log=lines.append) == 1
     errors = [m for m in lines if m.startswith("error:")]
     assert errors == ["error: oidv4_ssd: converting the TFLite model needs tflite2onnx: pip install "
-                      "'tflite2onnx==0.4.1' (in a checkout: pip install -e '.[ssd-convert]')"]
+                      "'tflite2onnx==0.4.1' (a dependency of morphonavi: reinstall it, e.g. pip install -e .)"]
     assert_nothing_installed(tmp_path / "cli")
 
 

@@ -37,10 +37,14 @@ def models_list(model_dir: Path | str | None = None) -> str:
 
 def expand_names(names: Sequence[str]) -> list[str]:
     """Model names, with set names (``default``, ``offline``, ``cloud``) replaced by their
-    downloadable members; :class:`ModelError` for unknown names."""
+    downloadable members, and the detector the mapper runs beside a set's own when present
+    (``offline``: the Open Images SSD, ``pipeline.mapper_config.AUTO_SECOND``), so that fetching a set
+    gets what its figures were measured with; :class:`ModelError` for unknown names."""
+    from pipeline.mapper_config import AUTO_SECOND
+
     out: list[str] = []
     for name in names:
-        members = MODEL_SETS.get(name, (name,))
+        members = MODEL_SETS.get(name, (name,)) + ((AUTO_SECOND[name],) if name in AUTO_SECOND else ())
         for m in members:
             spec = get_spec(m)
             if (not spec.remote or m == name) and m not in out:
