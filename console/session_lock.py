@@ -16,20 +16,13 @@ import logging
 import os
 from pathlib import Path
 
+from pipeline.lock_file import pid_in, write_pid
+
 from .session_types import SessionError
 
 log = logging.getLogger(__name__)
 
 LOCK_FILE = "console.lock"
-
-
-def _pid_in(fd: int) -> int | None:
-    try:
-        os.lseek(fd, 0, os.SEEK_SET)
-        text = os.read(fd, 64).decode("ascii", "replace").strip()
-        return int(text.split()[0]) if text else None
-    except (OSError, ValueError, IndexError):
-        return None
 
 
 def _alive(pid: int) -> bool:
@@ -55,7 +48,7 @@ def holder(folder: str | Path) -> int | None:
     try:
         fcntl.flock(fd, fcntl.LOCK_SH | fcntl.LOCK_NB)
     except BlockingIOError:
-        return _pid_in(fd) or 0
+        return pid_in(fd) or 0
     except OSError:
         return None
     finally:
@@ -97,7 +90,7 @@ class SessionLock:
         try:
             fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
         except OSError as exc:
-            pid = _pid_in(fd)
+            pid = pid_in(fd)
             os.close(fd)
             if exc.errno in (errno.EWOULDBLOCK, errno.EAGAIN, errno.EACCES):
                 who = f"PID {pid}" if pid is not None else "an unknown process"
@@ -105,17 +98,12 @@ class SessionLock:
                     f"the session folder {self.folder} is in use by another console ({who}): stop that console, "
                     "or start this one with --session DIR (another folder)") from None
             raise SessionError(f"cannot lock the session folder {self.folder}: {exc.strerror or exc}") from None
-        old = _pid_in(fd)
+        old = pid_in(fd)
         if old is not None and old != os.getpid():
             self.previous_pid = old
             log.info("session folder %s: took over the lock left by PID %d (%s)", self.folder, old,
                      "still running but not holding it" if _alive(old) else "no longer running")
-        try:
-            os.ftruncate(fd, 0)
-            os.lseek(fd, 0, os.SEEK_SET)
-            os.write(fd, f"{os.getpid()}\n".encode("ascii"))
-        except OSError:
-            pass  # opened read-only: the lock holds, the PID cannot be recorded
+        write_pid(fd)  # opened read-only: the lock holds, the PID cannot be recorded
         self._fd = fd
         self.held = True
         return self

@@ -16,17 +16,10 @@ import os
 from pathlib import Path
 from typing import Callable
 
+from pipeline.lock_file import pid_in, write_pid
+
 LOCK_FILE = ".fetch.lock"
 _READ_ONLY = (errno.EACCES, errno.EPERM, errno.EROFS)
-
-
-def _pid_in(fd: int) -> int | None:
-    try:
-        os.lseek(fd, 0, os.SEEK_SET)
-        text = os.read(fd, 64).decode("ascii", "replace").strip()
-        return int(text.split()[0]) if text else None
-    except (OSError, ValueError, IndexError):
-        return None
 
 
 class FetchLock:
@@ -58,7 +51,7 @@ class FetchLock:
             try:
                 fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
             except BlockingIOError:
-                pid = _pid_in(fd)
+                pid = pid_in(fd)
                 if self.waited_for is None:
                     self.waited_for = pid or 0
                     self.log(f"waiting for another fetch of {self.what} (pid {pid if pid else 'unknown'}) "
@@ -73,11 +66,7 @@ class FetchLock:
                 self.folder.mkdir(parents=True, exist_ok=True)
                 continue
             break
-        try:
-            os.ftruncate(fd, 0)
-            os.write(fd, f"{os.getpid()}\n".encode("ascii"))
-        except OSError:
-            pass
+        write_pid(fd)
         self._fd = fd
         self.held = True
         return self
