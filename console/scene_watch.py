@@ -26,12 +26,11 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Callable
 
-import json
-
 import numpy as np
 
 from pipeline.geometry import CameraMount, Pose, camera_pose_in_world
 from pipeline.scene import Capture, Scene, SceneError, SceneObject, scene_from_dict
+from pipeline.scene_json import parse_json_text
 
 MAX_FILE_BYTES = 5_000_000
 """Largest scene file read from the watched folder [bytes] (a room's scene is a few kB)."""
@@ -225,12 +224,7 @@ class SceneWatcher:
             raise SceneError("", f"cannot read the file: {exc}") from None
         if len(text.encode("utf-8")) > self._max_bytes:  # grew since it was listed
             raise SceneError("", f"over the {self._max_bytes / 1e6:g} MB limit for a scene file: not read")
-        try:
-            data = json.loads(text)
-        except json.JSONDecodeError as exc:
-            raise SceneError("", f"not valid JSON (line {exc.lineno}, column {exc.colno}): {exc.msg}") from None
-        except RecursionError:
-            raise SceneError("", "not usable JSON: nested too deeply") from None
+        data = parse_json_text(text)
         objs = data.get("objects") if isinstance(data, dict) else None
         if isinstance(objs, list) and len(objs) > self._max_objects:
             raise SceneError("objects", f"{len(objs)} objects is over the limit of {self._max_objects} "

@@ -126,15 +126,19 @@ def scene_to_dict(scene: Scene) -> dict[str, Any]:
     }
 
 
-def scene_from_json(text: str) -> Scene:
-    """Parse and validate scene JSON text."""
+def parse_json_text(text: str) -> Any:
+    """``json.loads`` of a scene file's text; :class:`SceneError` saying where it is not valid JSON."""
     try:
-        data = json.loads(text)
+        return json.loads(text)
     except json.JSONDecodeError as exc:
         raise SceneError("", f"not valid JSON (line {exc.lineno}, column {exc.colno}): {exc.msg}") from None
     except RecursionError:
         raise SceneError("", "not usable JSON: nested too deeply") from None
-    return scene_from_dict(data)
+
+
+def scene_from_json(text: str) -> Scene:
+    """Parse and validate scene JSON text."""
+    return scene_from_dict(parse_json_text(text))
 
 
 class _Reader:
@@ -297,4 +301,4 @@ def scene_from_dict(data: Any) -> Scene:
     return Scene(objects=tuple(objects), captures=tuple(captures), version=SCENE_VERSION)
 
 
-__all__ = ["scene_to_dict", "scene_from_dict", "scene_from_json"]
+__all__ = ["parse_json_text", "scene_to_dict", "scene_from_dict", "scene_from_json"]
