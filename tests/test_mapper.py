@@ -381,7 +381,7 @@ def test_offline_models_map_a_real_bedroom() -> None:
     err = min(np.linalg.norm(np.array(b.source.positions["camera"]) - bed_gt.center_cam) for b in beds)
     assert err / np.linalg.norm(bed_gt.center_cam) < 0.35
     # the offline set adds the Open Images SSD (class-aware merge) when its files are present
-    expected = "yolox_nano+oidv4_ssd" if (SHARED / "models" / "oidv4_ssd").is_dir() else "yolox_nano"
+    expected = "yolox_nano+oidv4_ssd (class-aware)" if (SHARED / "models" / "oidv4_ssd").is_dir() else "yolox_nano"
     assert scene.captures[0].models["detector"] == expected
     assert scene.captures[0].timings["segment_encoder"] > 0
 
