@@ -73,6 +73,12 @@ class Record:
     dropped_in: int = 0
     dropped_out: int = 0
     late: int = 0  # messages handled after a block
+
+    @property
+    def mode_changes(self) -> list[str]:
+        """:attr:`modes` with repeats folded: a SET_MODE re-sent because its ACK came late (a loaded
+        machine) is accepted twice but changes the mode once."""
+        return [m for i, m in enumerate(self.modes) if i == 0 or m != self.modes[i - 1]]
     max_speed: float = 0.0  # fastest horizontal speed flown [m/s]
 
 

@@ -127,13 +127,13 @@ def test_mjpeg_over_http_newest_frame_lost_notice_and_reconnect() -> None:
         assert int(photo.image[H // 2, W // 2, 0]) >= (sent_before - 1) % 250 - 3 or sent_before >= 249
         server.stop()
         assert wait_for(lambda: "stream lost" in cam.status), cam.status
-        assert any("stream lost" in n for n in notices), notices
+        assert wait_for(lambda: any("stream lost" in n for n in notices)), notices  # told after the status is set
         with pytest.raises(CameraSourceError, match="stream lost"):
             cam.next(timeout=0.5)
         server = MjpegServer(server.port)  # the camera comes back on the same address
         assert wait_for(lambda: cam.connected, 30), cam.status
         assert cam.next(timeout=20).image.shape == (H, W, 3)
-        assert any("stream back" in n for n in notices), notices
+        assert wait_for(lambda: any("stream back" in n for n in notices)), notices
     finally:
         cam.close()
         server.stop()

@@ -70,7 +70,7 @@ def test_land_here_lands_where_the_vehicle_is_without_flying_back() -> None:
         here = list(emu.pos)
         land = link.land_here(0.0)
         assert land.wait(30.0) is RunStatus.DONE, land.error
-        assert emu.record.modes[-2:] == ["BRAKE", "LAND"]
+        assert emu.record.mode_changes[-2:] == ["BRAKE", "LAND"]
         assert math.dist(emu.pos[:2], here[:2]) < 0.05 and emu.pos[2] == 0.0
 
 

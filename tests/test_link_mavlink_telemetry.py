@@ -126,8 +126,9 @@ def test_telemetry_stopping_without_a_heartbeat_gap_is_link_loss() -> None:
             link.latest_state()
         assert manager.wait(30.0, until=[MissionStatus.FAILSAFE]) is MissionStatus.FAILSAFE
         assert eventually(lambda: emu.mode == "LAND"), events(manager)
-        i = emu.record.modes.index("BRAKE", 1)
-        assert emu.record.modes[i:] == ["BRAKE", "LAND"]  # hold, then land: never back to GUIDED
+        changes = emu.record.mode_changes
+        i = changes.index("BRAKE", 1)
+        assert changes[i:] == ["BRAKE", "LAND"]  # hold, then land: never back to GUIDED
         assert eventually(lambda: emu.landed_state == mav.MAV_LANDED_STATE_ON_GROUND)
         emu.telemetry_enabled = True
         assert eventually(lambda: any("link restored after the failsafe" in m and "on the ground" in m

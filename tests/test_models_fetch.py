@@ -71,8 +71,8 @@ class RangeHandler(BaseHTTPRequestHandler):
         if srv.cut_after is not None:
             body = body[: srv.cut_after]
             srv.cut_after = None
+        srv.sent += len(body)  # counted before writing: the client may finish before this thread runs again
         self.wfile.write(body)
-        srv.sent += len(body)
 
 
 @pytest.fixture()
