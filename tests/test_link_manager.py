@@ -250,3 +250,41 @@ def test_manager_rejects_nonsense_settings(robot: SimRobot) -> None:
     with pytest.raises(MissionStateError, match="cannot pause"):
         MissionManager(robot).pause()
     assert math.isfinite(MissionManager(robot).failsafe_hold)
+
+
+def test_resume_pressed_on_the_failsafe_s_last_word_waits_for_its_end(monkeypatch: pytest.MonkeyPatch) -> None:
+    """The failsafe says "landed ... resume once the link is back" just before it ends: a resume at that
+    moment waits for the end (it was refused with "still acting" on a loaded machine), one during a
+    hold or landing that lasts is still refused."""
+    import threading
+    from dataclasses import replace
+
+    from console.link import manager as mgr
+
+    link = SimRobot(manual_clock=True)
+    link.connect()
+    try:
+        m = MissionManager(link)
+        with m._cond:
+            m._progress = replace(m._progress, status=MissionStatus.FAILSAFE)
+            m._failsafe_acting = True
+        ended = threading.Event()
+
+        def end_soon() -> None:
+            with m._cond:
+                m._failsafe_acting = False
+                m._cond.notify_all()
+            ended.set()
+
+        monkeypatch.setattr(mgr, "FAILSAFE_WRAP_UP_S", 60.0)  # however late the end comes on a loaded machine
+        threading.Timer(0.05, end_soon).start()
+        m.resume()  # the link is heard (simulator): it waited for the end, then resumed
+        assert ended.is_set() and m.progress().status is MissionStatus.RUNNING
+        with m._cond:
+            m._progress = replace(m._progress, status=MissionStatus.FAILSAFE)
+            m._failsafe_acting = True
+        monkeypatch.setattr(mgr, "FAILSAFE_WRAP_UP_S", 0.05)
+        with pytest.raises(MissionStateError, match="still acting"):
+            m.resume()  # a failsafe that goes on (a hold, a landing) is not waited for
+    finally:
+        link.close()

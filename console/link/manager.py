@@ -68,6 +68,11 @@ def _seg_length(seg: MissionSegment) -> float:
     return max(seg.length, 0.05)
 
 
+FAILSAFE_WRAP_UP_S = 1.0
+"""How long a resume waits for a failsafe that has said its last word to end [s] (a hold or a landing
+still under way takes longer and is refused)."""
+
+
 class MissionManager(SafetyMixin):
     """Executes missions on one :class:`~console.link.base.RobotLink`.
 
@@ -245,7 +250,10 @@ class MissionManager(SafetyMixin):
             status = self._progress.status
             if status not in (MissionStatus.PAUSED, MissionStatus.FAILSAFE):
                 raise MissionStateError(f"cannot resume: the mission is {status.value}")
-            if self._failsafe_acting:
+            # the failsafe's last words ("landed ... resume once the link is back") come just before it
+            # ends: a resume pressed on reading them waits for that end, not for a hold or a landing
+            if self._failsafe_acting and not self._cond.wait_for(lambda: not self._failsafe_acting,
+                                                                 FAILSAFE_WRAP_UP_S):
                 raise MissionStateError("the failsafe is still acting (holding / landing): wait for it")
         st = self.link.latest_state()
         if st is None or not st.link_ok or st.link_age > self.failsafe_after:

@@ -163,6 +163,7 @@ class SafetyMixin:
         finally:
             with self._cond:
                 self._failsafe_acting = False
+                self._cond.notify_all()  # a resume may be waiting for the end (MissionManager.resume)
 
     def _restored(self, when: str) -> None:
         self._told_back = True
