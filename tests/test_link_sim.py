@@ -333,3 +333,18 @@ def test_close_racing_a_background_connect_does_not_raise() -> None:
     robot._thread = _threading.Thread(target=lambda: None)  # created by connect(), not started yet
     robot.close()  # must not raise
     assert not robot.connected
+
+
+@pytest.mark.parametrize("height", [0.46, 0.65, 0.95, 1.31, 1.9])
+def test_a_landing_in_one_long_step_ends_on_the_floor_not_under_it(height: float) -> None:
+    """A loaded machine steps the simulator in long steps: the landing's last point was computed
+    1e-17 m under the floor (rounding), outside the workspace, and 'Land here' failed."""
+    robot = _manual(spool_time=0.1, climb_rate=1.0, descent_rate=0.5, settle_time=0.1)
+    run = robot.run_segment(MissionSegment(TAKEOFF, ((2.5, 0.7, 0.0), (2.5, 0.7, height))))
+    _run_until_done(robot, run)
+    assert robot.latest_state().position[2] == pytest.approx(height)
+    land = robot.land_here(0.0)
+    robot.step(100.0)  # the whole descent in one step
+    assert land.status is RunStatus.DONE, land.error
+    st = robot.latest_state()
+    assert st.landed and st.position[2] == 0.0

@@ -342,8 +342,11 @@ class SimRobot(RobotLink):
         if dist > 1e-9:
             n = max(1, int(math.ceil(step / _STEP)))
             origin = self._pos.copy()
+            reaches = dist - step <= 1e-9
             for i in range(1, n + 1):
-                p = origin + delta * (step * i / n / dist)
+                # the last point of a step that reaches the target is the target itself: rounding put a
+                # landing 1e-17 m under the floor, outside the workspace (seen on a loaded machine)
+                p = target.copy() if reaches and i == n else origin + delta * (step * i / n / dist)
                 if p[2] > self._floor + 1e-6:
                     self._landed = False
                 why = self._blocker(p)
