@@ -33,14 +33,14 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from pipeline.bench import load_dataset, match_greedy  # noqa: E402
+from pipeline.bench.evaluate import load_dataset, match_greedy  # noqa: E402
 from pipeline.catalog import Catalog  # noqa: E402
-from pipeline.image_io import read_image  # noqa: E402
+from pipeline.camera.image_io import read_image  # noqa: E402
 from pipeline.models.base import Detection  # noqa: E402
 from pipeline.models.nms import box_iou, nms  # noqa: E402
 from pipeline.models.ssd import MergedDetector, SsdDetector  # noqa: E402
 from pipeline.models.yolox import YoloxDetector  # noqa: E402
-from pipeline.tiled_detection import detect_planned, merge_detections, tile_detections  # noqa: E402
+from pipeline.models.tiled_detection import detect_planned, merge_detections, tile_detections  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 

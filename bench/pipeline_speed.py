@@ -40,8 +40,8 @@ sys.path[:] = [p for p in sys.path if Path(p or ".").resolve() != Path(__file__)
 sys.path.insert(0, str(ROOT))  # the repository's packages, also without an installed checkout
 
 from pipeline.catalog import default_catalog  # noqa: E402
-from pipeline.geometry import CameraMount, Intrinsics, Pose  # noqa: E402
-from pipeline.image_io import load_image  # noqa: E402
+from pipeline.camera.geometry import CameraMount, Intrinsics, Pose  # noqa: E402
+from pipeline.camera.image_io import load_image  # noqa: E402
 from pipeline.mapper import Mapper, MapperConfig, load_mapping_models  # noqa: E402
 
 W, H = 640, 480

@@ -32,7 +32,7 @@ sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 
 from console.app import ConsoleApp, ConsoleConfig, wait_until  # noqa: E402
 from console.link.sim import SimConfig, SimRobot  # noqa: E402
-from console.topics import ROBOT  # noqa: E402
+from console.session.topics import ROBOT  # noqa: E402
 from planner.mission import MissionSegment, SegmentKind  # noqa: E402
 
 LIMIT = 0.05  # extra CPU allowed with recording (fraction of the CPU without)

@@ -16,7 +16,7 @@ depth points (``MapperConfig(yaw_from_depth=False)``: every object faces the cam
 ``--tour [--noise] [--seed N]`` is the map-fusion benchmark of issue 12 (see :mod:`bench.sim_tour`):
 the robot captures from :data:`bench.sim_tour.TOUR` (10 poses: the good ones plus a close-up of a desk
 and views with objects cut by the border) and the captures are folded into one map by
-:func:`pipeline.map_fusion.fuse` and, in the same run, by the merge the console used before
+:func:`pipeline.mapping.map_fusion.fuse` and, in the same run, by the merge the console used before
 (``bench/legacy_merge.py``: newest estimate wins).
 """
 
@@ -32,9 +32,9 @@ import numpy as np  # noqa: E402
 
 from console.link.sim import SimRobot  # noqa: E402
 from console.link.world import paper_room  # noqa: E402
-from console.mapping_job import ground_truth_bundle_for  # noqa: E402
+from console.session.mapping_job import ground_truth_bundle_for  # noqa: E402
 from pipeline.catalog import default_catalog  # noqa: E402
-from pipeline.geometry import Pose  # noqa: E402
+from pipeline.camera.geometry import Pose  # noqa: E402
 from pipeline.mapper import Mapper, MapperConfig  # noqa: E402
 from planner.grid import Workspace  # noqa: E402
 

@@ -9,7 +9,7 @@ and :data:`BAD` ones (a camera 0.07 m from a desk, views with objects cut by the
 Perception is the renderer's ground truth through the real :class:`~pipeline.mapper.Mapper`;
 ``--noise`` adds realistic perception noise: box jitter (``N(0, 2 px)`` per side), missed
 detections (10 %) and a false detection in 40 % of the captures. The captures are folded into one
-map by :func:`pipeline.map_fusion.fuse` and, in the same run, by the console's former merge
+map by :func:`pipeline.mapping.map_fusion.fuse` and, in the same run, by the console's former merge
 (``legacy_merge.py``). Printed per merge: mapped objects; true objects in view at least once that
 are mapped (exactly once / twice or more / not at all); false objects; the 3D centre error median
 and 95th percentile [m] (each mapped object against its assigned true object); floor-standing
@@ -32,10 +32,10 @@ from console.link.sim import SimRobot  # noqa: E402
 from console.link.world import paper_room  # noqa: E402
 from legacy_merge import merge_observations  # noqa: E402
 from pipeline.catalog import default_catalog  # noqa: E402
-from pipeline.geometry import Pose  # noqa: E402
-from pipeline.ground_truth import ground_truth_bundle  # noqa: E402
-from pipeline.map_fusion import fuse  # noqa: E402
-from pipeline.map_support import FLOOR_ONLY  # noqa: E402
+from pipeline.camera.geometry import Pose  # noqa: E402
+from pipeline.models.ground_truth import ground_truth_bundle  # noqa: E402
+from pipeline.mapping.map_fusion import fuse  # noqa: E402
+from pipeline.mapping.map_support import FLOOR_ONLY  # noqa: E402
 from pipeline.mapper import Mapper  # noqa: E402
 from pipeline.scene import Scene  # noqa: E402
 

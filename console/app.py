@@ -1,7 +1,7 @@
 """The operator console: a viser server showing the digital twin, wired to the session and the robot.
 
 :class:`ConsoleApp` builds the pieces and connects them; it holds no state of its own beyond
-handles (the state is :class:`~console.session.Session`). Layout: the control panel on the right
+handles (the state is :class:`~console.session.session.Session`). Layout: the control panel on the right
 (robot status, Mission, Map, Plan, Session) and a camera panel on the left (photo with detections,
 depth); the 3D view shows the workspace, grid layers, objects, paths, the robot twin and the last
 capture's frustum. Every browser tab shares the same scene and controls.
@@ -26,20 +26,20 @@ import viser
 
 from planner.grid import Workspace
 
-from .capture_view import CaptureView
-from .grid_view import GridView
-from .mapping_job import MappingJob, Perceiver
-from .model_preload import ModelPreload
-from .mission_view import MissionRunner, MissionView
-from .objects_view import ObjectsView
-from .paths_view import PathsView
-from .scene_summary_view import SceneSummaryView
-from .client_notice import page_style, tell
-from .robot_view import RobotView, is_alert
-from .scene_watch import FrameError, NotReady, SceneWatcher, objects_to_world
-from .wording import plural
-from .session import JOB, NOTICE, SESSION_FILE, JobStatus, Notice, Session, SessionError
-from .session_types import robot_snapshot
+from console.views.capture_view import CaptureView
+from console.views.grid_view import GridView
+from console.session.mapping_job import MappingJob, Perceiver
+from console.session.model_preload import ModelPreload
+from console.views.mission_view import MissionRunner, MissionView
+from console.views.objects_view import ObjectsView
+from console.views.paths_view import PathsView
+from console.views.scene_summary_view import SceneSummaryView
+from console.views.client_notice import page_style, tell
+from console.views.robot_view import RobotView, is_alert
+from console.session.scene_watch import FrameError, NotReady, SceneWatcher, objects_to_world
+from console.wording import plural
+from console.session.session import JOB, NOTICE, SESSION_FILE, JobStatus, Notice, Session, SessionError
+from console.session.session_types import robot_snapshot
 
 log = logging.getLogger(__name__)
 
@@ -92,7 +92,7 @@ class ConsoleConfig:
         failsafe_hold: Seconds of holding, link still lost, before the failsafe lands the robot.
         link_options: Extra keyword options for :func:`console.link.open_link` (e.g. a MAVLink
             ``config`` with the NED frame and the ground-motion command set).
-        record: Record the session as MCAP in ``<session>/recordings`` (:mod:`console.recording`).
+        record: Record the session as MCAP in ``<session>/recordings`` (:mod:`console.recording.recording`).
         foxglove_port: Also serve the recorded topics live over the Foxglove WebSocket protocol on
             127.0.0.1 at this port (0 = any free port), or ``None`` (off).
     """
@@ -152,7 +152,7 @@ class ConsoleApp:
         if not is_loopback(cfg.host):
             log.warning("listening on %s: anyone who can reach this address and port can see the map and "
                         "DRIVE THE ROBOT; there is no login. Use the default 127.0.0.1 unless you must.", cfg.host)
-        from .link.world import DEFAULT_START
+        from console.link.world import DEFAULT_START
 
         self.link = self._link_override if self._link_override is not None else self._open_link(cfg.robot, cfg.captures, cfg.link_options)
         start = DEFAULT_START.translation
@@ -161,7 +161,7 @@ class ConsoleApp:
         restored: list[str] | None = None
         if not cfg.fresh:  # a bad file is kept aside by the session; SessionError (what to do) if it cannot be
             restored = session.restore_last()
-        from .recording import start_recording  # mission log (MCAP) in the session folder, closed last
+        from console.recording.recording import start_recording  # mission log (MCAP) in the session folder, closed last
 
         self.recorder = start_recording(session, foxglove_port=cfg.foxglove_port) if cfg.record else None
         if self.recorder is not None:
@@ -237,7 +237,7 @@ class ConsoleApp:
     # --- robot link ---------------------------------------------------------------------------------
     @staticmethod
     def _open_link(spec: str, captures: Path | None = None, options: Mapping[str, Any] | None = None) -> Any:
-        from .link import open_link
+        from console.link import open_link
 
         return open_link(spec, connect=False, captures=captures, **dict(options or {}))  # connected in the background: no vehicle, still a console
 
@@ -294,12 +294,12 @@ class ConsoleApp:
 
     # --- pluggable backends -------------------------------------------------------------------------
     def _choose_perceiver(self) -> Perceiver:
-        from .mapping_job import choose_perceiver
+        from console.session.mapping_job import choose_perceiver
 
         return choose_perceiver(self.link, self.config.models)
 
     def _make_runner(self) -> MissionRunner | None:
-        from .mission_view import make_runner
+        from console.views.mission_view import make_runner
 
         assert self.session is not None
         return make_runner(self.link, self.session, failsafe_after=self.config.failsafe_after,
@@ -320,7 +320,7 @@ class ConsoleApp:
 
         paths_holder: dict[str, PathsView] = {}
         gui.add_html(page_style(RIGHT_PANEL_PX))  # notifications bottom right; the "disconnected" banner
-        from .vehicle_commands import VehicleCommands
+        from console.session.vehicle_commands import VehicleCommands
 
         self.views["robot"] = RobotView(server, session, self.config.robot,
                                         commands=VehicleCommands(session, self.link, self.runner))
@@ -333,7 +333,7 @@ class ConsoleApp:
             self._job_bar = gui.add_progress_bar(0.0, visible=False, animated=True)
             self._job_md = gui.add_markdown(f"<small>perception: <b>{html.escape(perceiver.label)}</b></small>")
             cap.on_click(self._on_capture)
-            from .held_capture import HeldCaptureControls  # Merge / Replace / Discard a held-back capture
+            from console.views.held_capture import HeldCaptureControls  # Merge / Replace / Discard a held-back capture
 
             self.views["held_capture"] = HeldCaptureControls(server, session, self.mapping)
             self.views["grid"] = GridView(server, session)
@@ -350,7 +350,7 @@ class ConsoleApp:
         camera = gui.add_panel()
         with camera.add_tab("Camera", viser.Icon.CAMERA):
             self.views["capture"] = CaptureView(server, session, colors=self.views["objects"].colors)
-            from .camera_preview import live_preview
+            from console.views.camera_preview import live_preview
 
             preview = live_preview(server, self.link, notify=session.notify)  # a live camera's preview, or None
             if preview is not None:
@@ -457,7 +457,7 @@ class ConsoleApp:
         self.session.notify("Scene file ignored", f"{name}: {message}", "error")
 
     def _mount(self) -> Any:
-        from pipeline.geometry import CameraMount
+        from pipeline.camera.geometry import CameraMount
 
         mount = getattr(self.link, "mount", None)
         return mount if isinstance(mount, CameraMount) else CameraMount()

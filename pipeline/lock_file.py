@@ -1,6 +1,6 @@
 """The PID an ``fcntl.flock`` lock file holds: who has the lock (model fetches, console sessions).
 
-Both locks (:mod:`pipeline.models.fetch_lock`, ``console/session_lock.py``) write the holder's PID
+Both locks (:mod:`pipeline.models.fetch_lock`, ``console/session/session_lock.py``) write the holder's PID
 into the lock file so that a process refused or kept waiting can name it.
 """
 

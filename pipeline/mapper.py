@@ -25,21 +25,21 @@ from typing import Any, Callable, Sequence
 import numpy as np
 
 from pipeline.catalog import Catalog
-from pipeline.distance import DepthScale, truncation
-from pipeline.geometry import CameraError, CameraMount, Intrinsics, Pose, camera_pose_in_world
-from pipeline.ground_contact import GroundModel
+from pipeline.ranging.distance import DepthScale, truncation
+from pipeline.camera.geometry import CameraError, CameraMount, Intrinsics, Pose, camera_pose_in_world
+from pipeline.ranging.ground_contact import GroundModel
 from pipeline.mapper_config import (
     LIGHT_MODELS, MAX_IMAGE_SIDE, MapperConfig, MapperError, ModelBundleLike, as_rgb8, gravity_in_camera,
     load_mapping_models, prompts_from_words,
 )
 from pipeline.models.base import DepthMap, Detection, Prompt
 from pipeline.models.nms import nms
-from pipeline.placement import heading_in_frame
-from pipeline.ranging import MappedObject, Ranger
+from pipeline.ranging.placement import heading_in_frame
+from pipeline.ranging.ranger import MappedObject, Ranger
 from pipeline.scene import Capture, Scene, SceneObject, Source
 from pipeline.segment_policy import mask_wanted
 from pipeline.stage_progress import StageCallback, stage_reporter
-from pipeline.tiled_detection import detect_planned
+from pipeline.models.tiled_detection import detect_planned
 
 
 @dataclass
@@ -314,7 +314,7 @@ class Mapper:
                         positions={"camera": _vec(c_cam), "robot": _vec(c_robot)},
                     ),
                     # exact depth (a simulator's ground truth): no sigma; the map fusion's own model, tested
-                    # on that simulator, applies (see pipeline.observation_sigma)
+                    # on that simulator, applies (see pipeline.mapping.observation_sigma)
                     sigma=None if self._exact_depth else obj.sigma_along_ray,
                     cut=obj.cut_sides,
                 )
@@ -367,7 +367,7 @@ def _distances(obj: MappedObject) -> dict[str, float | None]:
     """The object's distance estimates [m, optical-axis depth of the centre] for ``source.distances``:
     size prior (``geometric``), depth map, fused, and with ``sigma`` fusion the floor contact
     (``ground_contact``, or ``ground_contact_bound`` when a nearer detection may hide it and it was used
-    only as an upper bound, :mod:`pipeline.occlusion`)."""
+    only as an upper bound, :mod:`pipeline.ranging.occlusion`)."""
     out: dict[str, float | None] = {"geometric": obj.geometric_z, "depth": obj.depth_z,
                                     "fused": obj.fused.distance if obj.fused else None}
     if obj.fusion is not None:

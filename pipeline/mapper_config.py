@@ -16,7 +16,7 @@ from typing import Any, Literal, Protocol, Sequence
 import numpy as np
 
 from pipeline.catalog import Catalog
-from pipeline.geometry import Pose
+from pipeline.camera.geometry import Pose
 from pipeline.models.base import Detector, Prompt
 
 MAX_IMAGE_SIDE = 8000
@@ -47,7 +47,7 @@ class MapperConfig:
         w_geometric: Weight of the size-prior distance in the fusion (the paper's 0.8).
         w_depth: Weight of the depth-map distance (the paper's 0.2).
         placement: ``box_fit`` (3D box fitted to the 2D box under gravity) or ``ray`` (the paper's
-            ``f * h / h_px`` on the box-centre ray); see :mod:`pipeline.placement`.
+            ``f * h / h_px`` on the box-centre ray); see :mod:`pipeline.ranging.placement`.
         truncation_margin_px: A box side within this many pixels of the border is cut [px].
         handle_truncation: Use only box dimensions the image border does not cut (``False``: the
             paper's plain ``f * h / h_px`` whatever the border does).
@@ -76,28 +76,28 @@ class MapperConfig:
         detect_tile_factor: For a detector with a fixed input size (``input_size``, e.g. YOLOX's
             416 px), photos whose longer side exceeds 1.25 tiles are also detected on overlapping
             tiles of ``detect_tile_factor`` times that size (small far objects, see
-            :mod:`pipeline.tiled_detection`); ``None``: the whole image only. 1.5 (624 px tiles for
+            :mod:`pipeline.models.tiled_detection`); ``None``: the whole image only. 1.5 (624 px tiles for
             YOLOX-Nano) was the best measured trade-off on the dev set: tiles of 1.0 / 0.75 input
             sizes (more, upscaled tiles) found no more objects for 2-3x the time and more false
             detections, and horizontal-flip test-time augmentation none more for twice the time.
             Each member of a merged detector is tiled to its own input size (its own ``tile_factor``
             attribute wins), and a detector that stretches its input also runs on square windows
-            (:func:`pipeline.tiled_detection.detect_planned`).
+            (:func:`pipeline.models.tiled_detection.detect_planned`).
         same_object_iou: Detections of different classes whose boxes overlap more than this (IoU) are
             taken for one object seen twice (a closed-vocabulary detector calls a bed "bed" and
             "sofa"): only the more confident stays. ``None``: keep both (class-aware NMS only).
         fusion: ``sigma`` (default): every cue (size prior, ground contact, depth) gives a distance and
-            a sigma, fused by inverse variance with outlier rejection (:mod:`pipeline.ranging`,
-            :mod:`pipeline.fusion`). ``fixed``: the weights above (the paper). ``adaptive``: with at least three
+            a sigma, fused by inverse variance with outlier rejection (:mod:`pipeline.ranging.ranger`,
+            :mod:`pipeline.ranging.fusion`). ``fixed``: the weights above (the paper). ``adaptive``: with at least three
             reference objects, inverse-variance weights from the size prior's spread
             (``geometric_sigma``) and the depth map's measured disagreement with the references
-            (:func:`~pipeline.distance.depth_fit_spread`, minus the size-prior part); with fewer,
+            (:func:`~pipeline.ranging.distance.depth_fit_spread`, minus the size-prior part); with fewer,
             the weights above. Adaptive fusion also drops a depth reading that disagrees with the
             size prior by more than ``gate_sigmas`` combined standard errors (log ratio).
         geometric_sigma: Relative error of a size-prior distance (the spread of real sizes).
         gate_sigmas: See ``fusion``.
         trust_depth_spread: Adaptive fusion: a metric depth map whose spread against the size priors
-            (:func:`~pipeline.distance.depth_fit_spread`) is at most this is trusted over a size prior
+            (:func:`~pipeline.ranging.distance.depth_fit_spread`) is at most this is trusted over a size prior
             that puts an object beyond the gate *farther* than the map (a box cut short by the border
             or an occluder; renders' exact depth: up to ~0.3 from occluded references; FastDepth on KITTI: larger).
         exact_depth: The depth map is exact metric depth (ground-truth perception of a simulator's
@@ -108,18 +108,18 @@ class MapperConfig:
             ray give the same box; on noise-free renders the fitted yaw of near-square footprints
             was off by up to ~50 degrees). :attr:`yaw_from_depth` takes precedence where it applies.
         yaw_from_depth: Give known-size objects the yaw of the footprint fitted to their mask's pixels
-            back-projected with the metric depth (:func:`~pipeline.orientation.length_axis_from_points`;
+            back-projected with the metric depth (:func:`~pipeline.ranging.orientation.length_axis_from_points`;
             facing the camera where the points do not determine it). ``None`` (default): only when the
             depth is trustworthy metric depth: exact (``exact_depth`` or a backend declaring it), or a
             metric map that adaptive fusion trusts (spread against the size priors within
             ``trust_depth_spread``). ``True``: whenever the depth map has a metric scale; ``False``: never.
         ground_contact: ``sigma`` fusion: range floor-standing objects (catalog ``on_floor``) from where
             their box bottom meets the floor, when the camera height is known (camera above world
-            z = 0 by more than 5 cm); see :mod:`pipeline.ground_contact`.
+            z = 0 by more than 5 cm); see :mod:`pipeline.ranging.ground_contact`.
         measure_height: ``sigma`` fusion with a known floor: a floor-standing object of known class gets
             the height its box's top edge shows at its fused distance (fused with the catalog's; at
             least the visible height when the border cuts the top), its bottom staying on the floor;
-            see :mod:`pipeline.measured_height`.
+            see :mod:`pipeline.ranging.measured_height`.
         sigma_pitch: 1-sigma of the camera's pitch knowledge [rad] (ground contact).
         sigma_camera_height: 1-sigma of the camera height [m] (ground contact).
         sigma_floor: 1-sigma of the floor under an object differing from the plane [m] (ground contact).
@@ -219,7 +219,7 @@ def as_rgb8(image: object) -> np.ndarray:
         raise MapperError(f"image is empty (shape {image.shape})")
     if image.dtype != np.uint8:
         raise MapperError(
-            f"image has dtype {image.dtype}; the mapper takes 8-bit images (load files with pipeline.image_io, "
+            f"image has dtype {image.dtype}; the mapper takes 8-bit images (load files with pipeline.camera.image_io, "
             "which converts 16-bit ones)"
         )
     if image.ndim == 2:

@@ -6,7 +6,7 @@
   alias), and one check of it and of ``$MORPHONAVI_MODELS``.
 
 ``parse_numbers("-1,2,0,90", "--pose", (2, 3, 4), "x,y[,z[,yaw_deg]]")`` -> ``[-1.0, 2.0, 0.0, 90.0]``.
-Negative values are fine here; :func:`console.cli.main` makes sure argparse hands them over (an
+Negative values are fine here; :func:`console.cli.morphonavi.main` makes sure argparse hands them over (an
 option value starting with ``-`` is otherwise taken for an option).
 """
 

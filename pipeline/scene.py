@@ -116,10 +116,10 @@ class SceneObject:
         source: Provenance of the estimate.
         pinned: The operator moved, typed or confirmed it: observations never move it (see
             :attr:`is_pinned`, which also counts ``source.method == "manual"``).
-        history: The observations fused into it, oldest first (see :mod:`pipeline.map_fusion`).
+        history: The observations fused into it, oldest first (see :mod:`pipeline.mapping.map_fusion`).
         flags: Corrections made by the map fusion, for the operator (``set on the floor: ...``).
         sigma: The mapper's 1-sigma [m] of the centre along the camera ray (inverse-variance fusion of
-            its distance cues, :mod:`pipeline.fusion`), ``None`` when not estimated.
+            its distance cues, :mod:`pipeline.ranging.fusion`), ``None`` when not estimated.
         cut: Sides of the 2D box the image border cuts (``left``, ``top``, ``right``, ``bottom``).
     """
 
@@ -206,12 +206,12 @@ class Scene:
         return replace(self, objects=tuple(objects))
 
     def to_dict(self) -> dict[str, Any]:
-        from .scene_json import scene_to_dict
+        from pipeline.scene_json import scene_to_dict
 
         return scene_to_dict(self)
 
     def to_json(self) -> str:
-        from .scene_json import scene_to_dict
+        from pipeline.scene_json import scene_to_dict
 
         return json.dumps(scene_to_dict(self), indent=1)
 
@@ -229,7 +229,7 @@ class Scene:
             raise SceneError("", f"scene file not found: {p}") from None
         except (OSError, UnicodeDecodeError) as exc:
             raise SceneError("", f"cannot read scene file {p}: {exc}") from None
-        from .scene_json import scene_from_json
+        from pipeline.scene_json import scene_from_json
 
         return scene_from_json(text)
 
@@ -297,7 +297,7 @@ def __getattr__(name: str) -> Any:
     """Re-export of the JSON functions of :mod:`pipeline.scene_json` (imported on first use: that
     module imports this one, so a top-level import here would be circular)."""
     if name in _JSON_NAMES:
-        from . import scene_json
+        from pipeline import scene_json
 
         return getattr(scene_json, name)
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

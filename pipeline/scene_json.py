@@ -14,7 +14,7 @@ import json
 import math
 from typing import Any, cast
 
-from .scene import (FRAMES, SCENE_VERSION, Capture, Frame, Scene, SceneError, SceneObject, Sighting, Source,
+from pipeline.scene import (FRAMES, SCENE_VERSION, Capture, Frame, Scene, SceneError, SceneObject, Sighting, Source,
                     Vec3)
 
 

@@ -3,7 +3,7 @@ a 0.98 s photo on 2 cores) runs only on photos where a mask changes a result.
 
 ``auto`` (the default) asks for a mask where:
 
-- the distance depends on it (:meth:`pipeline.ranging.Ranger.needs_mask`: an object of unknown size,
+- the distance depends on it (:meth:`pipeline.ranging.ranger.Ranger.needs_mask`: an object of unknown size,
   whose extent is measured from the mask, or a box the border cuts on both axes, ranged from the
   depth under the mask alone); a known-size object's distance comes from its box (size prior, floor
   contact) and the depth over the middle of its box;

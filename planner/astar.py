@@ -32,8 +32,8 @@ from typing import Sequence
 
 import numpy as np
 
-from .astar_kernel import _move_table, _moves, _MoveTable, _rekey, _search, _swept, _trace, octile_distance
-from .heuristic import LayerHeuristic, build_layer_heuristic
+from planner.astar_kernel import _move_table, _moves, _MoveTable, _rekey, _search, _swept, _trace, octile_distance
+from planner.heuristic import LayerHeuristic, build_layer_heuristic
 
 __all__ = [
     "AStarResult",

@@ -69,7 +69,7 @@ paths). *Consistent*, i.e. ``h(a) <= e + h(b)`` for a move ``a = (q, z) -> b = (
 - The octile bound is consistent (:func:`planner.astar.astar`); a min or max of consistent
   functions is consistent.
 
-``tests/test_heuristic.py`` checks ``h(a) <= e + h(b)`` on every edge and ``h <=`` the true
+``tests/planner/test_heuristic.py`` checks ``h(a) <= e + h(b)`` on every edge and ``h <=`` the true
 cost-to-go on random and aerial-ground grids.
 
 The search multiplies ``h`` by ``1 - 1e-9`` (still consistent) as a margin for rounding. The
@@ -86,7 +86,7 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
-from .astar_kernel import _field
+from planner.astar_kernel import _field
 
 __all__ = ["LayerHeuristic", "build_layer_heuristic", "heuristic_field", "MAX_LEVELS"]
 

@@ -25,7 +25,7 @@ import numpy as np
 
 from pipeline.scene import write_text_atomic
 
-from .grid import CellState, PlanningGrid, Workspace
+from planner.grid import CellState, PlanningGrid, Workspace
 
 MISSION_VERSION = 1
 

@@ -52,9 +52,9 @@ from scipy import ndimage
 
 from pipeline.scene import Scene, SceneObject
 
-from .grid import CellState, PlanningGrid
-from .mission import MissionError, SegmentKind, mission_from_cells
-from .route import Route
+from planner.grid import CellState, PlanningGrid
+from planner.mission import MissionError, SegmentKind, mission_from_cells
+from planner.route import Route
 
 APPROACH_MAX = 1.0
 """Farthest an approach cell's centre may be from the object's footprint [m]."""

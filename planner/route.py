@@ -18,9 +18,9 @@ from typing import Any, Sequence
 
 import numpy as np
 
-from .astar import AStarSearcher, min_finite_cost
-from .grid import CellState, CostWeights, PlanningGrid
-from .mission import Mission, mission_from_cells
+from planner.astar import AStarSearcher, min_finite_cost
+from planner.grid import CellState, CostWeights, PlanningGrid
+from planner.mission import Mission, mission_from_cells
 
 Vec3 = tuple[float, float, float]
 

@@ -57,10 +57,10 @@ import numpy as np
 
 from pipeline.scene import Scene, SceneObject
 
-from .grid import PlanningGrid
-from .object_goal import Reachability, footprint
-from .route import Route
-from .view_geometry import RobotView, overlap_fraction, polygon_gap
+from planner.grid import PlanningGrid
+from planner.object_goal import Reachability, footprint
+from planner.route import Route
+from planner.view_geometry import RobotView, overlap_fraction, polygon_gap
 
 GRAPH_SCHEMA_VERSION = 2
 """Version 2 added ``placement`` and ``floor_gap`` to objects and ``code`` to ``reach``."""

@@ -19,7 +19,7 @@ from __future__ import annotations
 from collections import Counter
 from typing import Any
 
-from .scene_graph import placement
+from planner.scene_graph import placement
 
 MAX_OBJECT_LINES = 12
 MAX_GROUP_LINES = 5

@@ -14,7 +14,7 @@ import numpy as np
 
 from pipeline.scene import SceneObject
 
-from .object_goal import footprint, footprint_distance
+from planner.object_goal import footprint, footprint_distance
 
 
 def wrap(a: np.ndarray | float) -> Any:

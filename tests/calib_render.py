@@ -10,7 +10,7 @@ import cv2
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from pipeline.calibration import Board
+from pipeline.camera.calibration import Board
 
 PX_PER_SQUARE = 40
 MARGIN_PX = 40

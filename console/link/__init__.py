@@ -13,7 +13,7 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
-from .base import (CaptureResult, CommandRejected, GroundTruth, LinkError, LinkTimeout, Mode, RobotLink,
+from console.link.base import (CaptureResult, CommandRejected, GroundTruth, LinkError, LinkTimeout, Mode, RobotLink,
                    RobotState, RunStatus, SegmentRun, VisibleObject)
 
 LINK_SPECS = ("sim", "mavlink:udpin:HOST:PORT", "mavlink:udpout:HOST:PORT", "mavlink:tcp:HOST:PORT",
@@ -39,7 +39,7 @@ def open_link(spec: str, *, connect: bool = True, timeout: float = 10.0,
     text = (spec or "").strip()
     link: RobotLink
     if text == "sim" or text.startswith("sim:"):
-        from .sim import SimRobot
+        from console.link.sim import SimRobot
 
         if text not in ("sim", "sim:"):
             raise LinkError(f"robot {spec!r}: the simulator takes no address, use 'sim'")
@@ -48,7 +48,7 @@ def open_link(spec: str, *, connect: bool = True, timeout: float = 10.0,
         except TypeError as exc:
             raise LinkError(f"robot 'sim': {exc}") from None
     elif text.startswith("mavlink:"):
-        from .mavlink import MavlinkLink
+        from console.link.mavlink import MavlinkLink
 
         try:
             link = MavlinkLink(text[len("mavlink:"):], captures=captures, **kw)

@@ -24,7 +24,7 @@ from typing import Callable, Literal
 
 import numpy as np
 
-from pipeline.geometry import CameraMount, Intrinsics, Pose
+from pipeline.camera.geometry import CameraMount, Intrinsics, Pose
 from pipeline.scene import SceneObject
 from planner.mission import MissionSegment
 

@@ -28,10 +28,10 @@ from typing import Any, Callable
 
 import numpy as np
 
-from pipeline.geometry import CameraConfig, CameraError
+from pipeline.camera.geometry import CameraConfig, CameraError
 
-from .base import LinkError
-from .captures import FolderPhoto
+from console.link.base import LinkError
+from console.link.captures import FolderPhoto
 
 log = logging.getLogger(__name__)
 
@@ -330,7 +330,7 @@ def open_camera_source(source: str, camera_file: str | Path | None, **kw: Any) -
         CameraSourceError: No camera file (a live camera needs its intrinsics), or a bad source.
         CameraError: The camera file is invalid (the message names the key).
     """
-    from pipeline.geometry import load_camera_toml
+    from pipeline.camera.camera_file import load_camera_toml
 
     if camera_file is None:
         raise CameraSourceError("--camera needs --camera-file camera.toml (its intrinsics and mount; "

@@ -15,7 +15,7 @@ photo resized after calibration is refused instead of being mapped 1/scale too f
 above the floor) give the camera's pose for that photo (the bench format); the console then uses
 it instead of the robot's mount (:attr:`FolderPhoto.mount`).
 
-Photos are loaded by :func:`pipeline.image_io.read_image`: EXIF orientation applied (logged when a
+Photos are loaded by :func:`pipeline.camera.image_io.read_image`: EXIF orientation applied (logged when a
 photo has the tag), ``K`` describes the upright image, truncated or corrupt JPEGs are refused.
 Every entry's JSON and image size are checked when the folder is opened, so a bad folder is refused
 at start, naming the file and the field. An ``index.json`` listing ``{"json": "<relative path>"}`` entries fixes the
@@ -35,11 +35,11 @@ from typing import Any
 
 import numpy as np
 
-from pipeline.geometry import CameraError, CameraMount, Intrinsics, mount_from_gravity_height
-from pipeline.image_io import ImageError, read_image, upright_size
+from pipeline.camera.geometry import CameraError, CameraMount, Intrinsics, mount_from_gravity_height
+from pipeline.camera.image_io import ImageError, read_image, upright_size
 from pipeline.scene import SceneObject, Source
 
-from .base import GroundTruth, LinkError, VisibleObject
+from console.link.base import GroundTruth, LinkError, VisibleObject
 
 IMAGE_SUFFIXES = (".jpg", ".jpeg", ".png")
 

@@ -46,11 +46,11 @@ import numpy as np
 
 from planner.mission import Mission, MissionSegment, SegmentKind
 
-from ..wording import kind_text  # plain words (take-off), no UI
-from .base import LinkError, RobotLink, RobotState, RunStatus, SegmentRun
-from .manager_resume import original_index, segment_parts
-from .manager_safety import SafetyMixin
-from .manager_types import (EventListener, GeofenceError, MissionEvent, MissionProgress, MissionStateError,
+from console.wording import kind_text  # plain words (take-off), no UI
+from console.link.base import LinkError, RobotLink, RobotState, RunStatus, SegmentRun
+from console.link.manager_resume import original_index, segment_parts
+from console.link.manager_safety import SafetyMixin
+from console.link.manager_types import (EventListener, GeofenceError, MissionEvent, MissionProgress, MissionStateError,
                             MissionStatus)
 
 log = logging.getLogger(__name__)

@@ -17,7 +17,7 @@ import numpy as np
 
 from planner.mission import MissionSegment, SegmentKind
 
-from .base import LinkError, RobotState
+from console.link.base import LinkError, RobotState
 
 
 def segment_parts(seg: MissionSegment, st: RobotState, floor: float, next_wp: int | None, fresh: bool,

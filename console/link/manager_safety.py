@@ -24,7 +24,7 @@ import numpy as np
 
 from planner.mission import MissionSegment, SegmentKind
 
-from .base import LinkError, Mode, RunStatus, SegmentRun
+from console.link.base import LinkError, Mode, RunStatus, SegmentRun
 
 
 class SafetyMixin:

@@ -36,19 +36,19 @@ from typing import Any, Callable
 
 import numpy as np
 
-from pipeline.geometry import CameraMount, Intrinsics, camera_pose_in_world
+from pipeline.camera.geometry import CameraMount, Intrinsics, camera_pose_in_world
 from planner.mission import MissionSegment, SegmentKind
 
-from .base import CaptureResult, LinkError, LinkTimeout, RobotLink, RobotState, RunStatus, SegmentRun
-from .captures import CapturesFolder
-from .mavlink_commands import (POSITION_ONLY_MASK, POSITION_YAW_MASK, VELOCITY_ONLY_MASK, Commander, Stopped,
+from console.link.base import CaptureResult, LinkError, LinkTimeout, RobotLink, RobotState, RunStatus, SegmentRun
+from console.link.captures import CapturesFolder
+from console.link.mavlink_commands import (POSITION_ONLY_MASK, POSITION_YAW_MASK, VELOCITY_ONLY_MASK, Commander, Stopped,
                                copter_modes)
-from .mavlink_config import GroundMotion, MavlinkConfig
-from .mavlink_segments import STILL_DWELL, SegmentExecutor
-from .mavlink_state import make_state
-from .mavlink_telemetry import LANDED_LANDING, LANDED_ON_GROUND, Telemetry
-from .mavlink_transport import MavTransport, StreamKeeper, parse_connection
-from .ned import NedFrame
+from console.link.mavlink_config import GroundMotion, MavlinkConfig
+from console.link.mavlink_segments import STILL_DWELL, SegmentExecutor
+from console.link.mavlink_state import make_state
+from console.link.mavlink_telemetry import LANDED_LANDING, LANDED_ON_GROUND, Telemetry
+from console.link.mavlink_transport import MavTransport, StreamKeeper, parse_connection
+from console.link.ned import NedFrame
 
 log = logging.getLogger(__name__)
 

@@ -22,10 +22,10 @@ import threading
 import time
 from typing import Any, Callable
 
-from .base import CommandRejected, LinkError, LinkTimeout
-from .mavlink_telemetry import Telemetry
-from .mavlink_transport import MavTransport, mavutil
-from .ned import NedFrame
+from console.link.base import CommandRejected, LinkError, LinkTimeout
+from console.link.mavlink_telemetry import Telemetry
+from console.link.mavlink_transport import MavTransport, mavutil
+from console.link.ned import NedFrame
 
 log = logging.getLogger(__name__)
 

@@ -6,8 +6,8 @@ import math
 from dataclasses import dataclass, field
 from typing import Literal
 
-from .mavlink_commands import copter_modes
-from .ned import NedFrame
+from console.link.mavlink_commands import copter_modes
+from console.link.ned import NedFrame
 
 
 @dataclass(frozen=True)

@@ -28,11 +28,11 @@ import numpy as np
 
 from planner.mission import SegmentKind
 
-from .base import LinkError, LinkTimeout, RunStatus, SegmentRun
-from .mavlink_commands import SPEED_CLIMB, SPEED_DESCENT, SPEED_GROUND, Commander, Stopped
-from .mavlink_config import MavlinkConfig
-from .mavlink_state import landed
-from .mavlink_telemetry import LANDED_IN_AIR, LANDED_TAKEOFF, Telemetry
+from console.link.base import LinkError, LinkTimeout, RunStatus, SegmentRun
+from console.link.mavlink_commands import SPEED_CLIMB, SPEED_DESCENT, SPEED_GROUND, Commander, Stopped
+from console.link.mavlink_config import MavlinkConfig
+from console.link.mavlink_state import landed
+from console.link.mavlink_telemetry import LANDED_IN_AIR, LANDED_TAKEOFF, Telemetry
 
 log = logging.getLogger(__name__)
 

@@ -16,9 +16,9 @@ import time
 
 from planner.mission import SegmentKind
 
-from .base import Mode, RobotState
-from .mavlink_config import MavlinkConfig
-from .mavlink_telemetry import (LANDED_LANDING, LANDED_ON_GROUND, LANDED_TAKEOFF, LANDED_UNDEFINED,
+from console.link.base import Mode, RobotState
+from console.link.mavlink_config import MavlinkConfig
+from console.link.mavlink_telemetry import (LANDED_LANDING, LANDED_ON_GROUND, LANDED_TAKEOFF, LANDED_UNDEFINED,
                                 STATUSTEXT_IN_STATE, Telemetry, Vehicle)
 
 _MOVING = {SegmentKind.WALK: Mode.WALKING, SegmentKind.TAKEOFF: Mode.TAKING_OFF, SegmentKind.FLY: Mode.FLYING,

@@ -27,8 +27,8 @@ import time
 from pathlib import Path
 from typing import Any, Callable
 
-from .base import CommandRejected, LinkError
-from .mavlink_telemetry import TRACKED, Telemetry
+from console.link.base import CommandRejected, LinkError
+from console.link.mavlink_telemetry import TRACKED, Telemetry
 
 log = logging.getLogger(__name__)
 

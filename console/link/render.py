@@ -24,7 +24,7 @@ from typing import Sequence
 
 import numpy as np
 
-from pipeline.geometry import Intrinsics, Pose
+from pipeline.camera.geometry import Intrinsics, Pose
 from pipeline.scene import Scene, SceneObject
 
 log = logging.getLogger(__name__)

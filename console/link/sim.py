@@ -30,18 +30,18 @@ from typing import Sequence
 
 import numpy as np
 
-from pipeline.geometry import CameraMount, Intrinsics, Pose, camera_pose_in_world
+from pipeline.camera.geometry import CameraMount, Intrinsics, Pose, camera_pose_in_world
 from pipeline.scene import Scene
 from planner.grid import CellState, PlanningGrid, build_grid
 from planner.mission import MissionSegment
 
-from .base import CaptureResult, LinkError, Mode, RobotLink, RobotState, RunStatus, SegmentRun
-from .captures import CapturesFolder
-from .render import SceneRenderer
-from .sim_camera import folder_capture, render_capture
-from .sim_config import DEFAULT_INTRINSICS, DEFAULT_MOUNT, SimConfig
-from .sim_motion import Phase, path_length, plan_segment, verb, wrap_angle
-from .world import DEFAULT_START, ROOM_MAX, ROOM_MIN, paper_room
+from console.link.base import CaptureResult, LinkError, Mode, RobotLink, RobotState, RunStatus, SegmentRun
+from console.link.captures import CapturesFolder
+from console.link.render import SceneRenderer
+from console.link.sim_camera import folder_capture, render_capture
+from console.link.sim_config import DEFAULT_INTRINSICS, DEFAULT_MOUNT, SimConfig
+from console.link.sim_motion import Phase, path_length, plan_segment, verb, wrap_angle
+from console.link.world import DEFAULT_START, ROOM_MAX, ROOM_MIN, paper_room
 
 log = logging.getLogger(__name__)
 

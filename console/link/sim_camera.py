@@ -14,12 +14,12 @@ import time
 
 import numpy as np
 
-from pipeline.geometry import CameraMount, Intrinsics, Pose, camera_pose_in_world
+from pipeline.camera.geometry import CameraMount, Intrinsics, Pose, camera_pose_in_world
 from pipeline.scene import Scene
 
-from .base import CaptureResult, GroundTruth, VisibleObject
-from .captures import FolderPhoto
-from .render import RenderResult
+from console.link.base import CaptureResult, GroundTruth, VisibleObject
+from console.link.captures import FolderPhoto
+from console.link.render import RenderResult
 
 
 def visible_objects(r: RenderResult, min_pixels: int) -> tuple[VisibleObject, ...]:

@@ -9,7 +9,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
-from pipeline.geometry import CameraMount, Intrinsics
+from pipeline.camera.geometry import CameraMount, Intrinsics
 from planner.grid import Workspace
 
 DEFAULT_INTRINSICS = Intrinsics(525.0, 525.0, 319.5, 239.5, 640, 480)

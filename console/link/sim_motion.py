@@ -18,8 +18,8 @@ import numpy as np
 
 from planner.mission import MissionSegment, SegmentKind
 
-from .base import LinkError, Mode
-from .sim_config import SimConfig
+from console.link.base import LinkError, Mode
+from console.link.sim_config import SimConfig
 
 Vec3 = tuple[float, float, float]
 

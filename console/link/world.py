@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import math
 
-from pipeline.geometry import Pose
+from pipeline.camera.geometry import Pose
 from pipeline.scene import Scene, SceneObject, Source
 
 ROOM_MIN: tuple[float, float, float] = (0.0, -1.0, 0.0)

@@ -188,7 +188,7 @@ def check_image(image: object, who: str = "model") -> np.ndarray:
     if image.ndim != 3 or image.shape[2] != 3:
         raise ModelError(f"{who}: expected a HxWx3 RGB image, got shape {image.shape}")
     if image.dtype != np.uint8:
-        raise ModelError(f"{who}: expected dtype uint8, got {image.dtype} (load images with pipeline.image_io)")
+        raise ModelError(f"{who}: expected dtype uint8, got {image.dtype} (load images with pipeline.camera.image_io)")
     if image.shape[0] < 2 or image.shape[1] < 2:
         raise ModelError(f"{who}: image too small ({image.shape[1]}x{image.shape[0]} px)")
     return np.ascontiguousarray(image)

@@ -1,6 +1,6 @@
 """One fetch at a time per model folder: an exclusive ``fcntl.flock`` on ``<folder>/.fetch.lock``.
 
-Like the console's session lock (``console/session_lock.py``): the lock file holds the owner's PID
+Like the console's session lock (``console/session/session_lock.py``): the lock file holds the owner's PID
 and the kernel drops the lock when its process ends, however it ends. A second fetch of the same
 model into the same folder waits for the first (saying so, with the holder's PID) and then finds
 the files in place. The lock file is removed on release; a waiter that took the lock on a removed

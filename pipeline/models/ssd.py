@@ -77,7 +77,7 @@ class SsdDetector:
         nms_iou: IoU above which a lower-scoring box of the same class is dropped.
         threads: onnxruntime intra-op threads.
         tile_factor: Tiles of this many input sizes besides the whole image and its square windows
-            (:func:`pipeline.tiled_detection.detect_planned`); ``None`` (default): none. On the dev set,
+            (:func:`pipeline.models.tiled_detection.detect_planned`); ``None`` (default): none. On the dev set,
             merged class-aware, 450 / 300 px tiles (1.5 / 1.0) found no object that the whole image
             and its windows missed, for 15 / 4 more unmatched detections
             (``bench/detector_variants.py``; README, "Second detector").
@@ -176,7 +176,7 @@ class MergedDetector:
             Open Images ``Table`` is any table, COCO's ``dining table`` is one kind).
         same_object_iou: See ``policy``; ``None``: cross-member boxes of different classes all stay.
 
-    ``input_size`` is the first member's; :func:`pipeline.tiled_detection.detect_planned` tiles each
+    ``input_size`` is the first member's; :func:`pipeline.models.tiled_detection.detect_planned` tiles each
     member to its own. Each member's ``label_map`` stays its own (the mapper maps labels per member).
     """
 

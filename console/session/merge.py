@@ -1,0 +1,22 @@
+"""Folding newly mapped objects into the session's scene: a thin caller of :mod:`pipeline.mapping.map_fusion`.
+
+All objects are in the world frame [m]. The fusion itself (association, uncertainty-weighted update,
+pinned objects, support, consistency) is pure and lives in the pipeline; the console only calls it.
+"""
+
+from __future__ import annotations
+
+from pipeline.mapping.map_fusion import FusionReport, fuse
+from pipeline.scene import Scene
+
+__all__ = ["FusionReport", "fuse", "merge_observations"]
+
+
+def merge_observations(scene: Scene, new: Scene) -> tuple[Scene, list[str], list[str]]:
+    """Fold newly mapped world-frame objects into a scene; returns ``(scene, added_ids, updated_ids)``.
+
+    The session's merge: never held back (the mapping job checks a capture's consistency before it
+    spawns it; a scene file the operator loads is merged as asked). See :func:`pipeline.mapping.map_fusion.fuse`.
+    """
+    merged, report = fuse(scene, new, check_consistency=False)
+    return merged, report.added, report.updated

@@ -1,0 +1,471 @@
+"""The console's state: scene, grid, route, mission, last capture, robot, jobs; save and restore.
+
+Everything the operator sees lives here, behind one lock, and every change is announced to the
+subscribed listeners (the views of every browser tab) as ``(topic, payload)``. Listeners run on
+the thread that made the change, after the lock is released; they read what they need back
+through the properties, which return immutable snapshots.
+
+Frames and units: positions are in the world frame (the console's frame, z up) [m], yaw about
++z [rad]; the camera pose of a capture is ``world <- camera`` with the camera in the OpenCV
+optical frame (x right, y down, z forward).
+
+Persistence: the session folder holds ``session.json`` (scene, route, mission, settings, the
+last capture's metadata, written after every change) and ``captures/`` (photo and depth of the
+last capture); the code is :class:`console.session.session_store.Persistence`, mixed in here. Map edits
+(spawn, move, delete, capture, load) can be undone with :meth:`Session.undo_edit`; scenes with
+implausible objects are refused naming the field (:func:`pipeline.scene.check_plausible`). Names
+typed by the operator are resolved with :meth:`Session.resolve_name`, which
+refuses anything that would land outside the session folder.
+
+Operator rules (the route starts at the robot, what Execute and the vehicle commands allow, runs
+retired by edits, goals inside the robot's margin): :mod:`console.session.operator_state`, applied here by
+:class:`console.session.operator_session.OperatorRules`, mixed in.
+
+The pieces live next door and are re-exported here: topics in :mod:`console.session.topics`, value types
+in :mod:`console.session.session_types`, the scene merge in :mod:`console.session.merge`, click picking in
+:mod:`console.views.picking`, the session file format in :mod:`console.session.session_store` and the capture
+files in :mod:`console.session.capture_files`.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import threading
+from dataclasses import replace
+from pathlib import Path
+from typing import Any, Callable, Sequence
+
+from pipeline.scene import Scene, SceneObject
+from planner.grid import CostWeights, GridError, PlanningGrid, Workspace, build_grid
+from planner.mission import Mission
+from planner.route import PlanResult, Route, path_points
+
+from pipeline.scene import SceneError, check_plausible
+
+from console.session.capture_files import CAPTURE_DIR
+from console.session.history import History, Undo
+from console.session.merge import merge_observations
+from console.session.operator_session import OperatorRules
+from console.views.picking import goal_on_plane, ray_plane
+from console.session.session_store import SESSION_FILE, SESSION_VERSION, Persistence
+from console.session.session_types import (
+    CaptureRecord, Detection, JobStatus, Notice, RobotSnapshot, RouteSnapshot, RunStatus, SessionError, Settings,
+    SpawnReport, Vec3, fmt_point,
+)
+from console.session.topics import (
+    CAPTURE, GRID, JOB, MISSION, NOTICE, ROBOT, ROUTE, RUN, SCENE, SELECTION, SETTINGS, Listener,
+)
+
+__all__ = [
+    "CAPTURE", "CAPTURE_DIR", "GRID", "JOB", "MISSION", "NOTICE", "ROBOT", "ROUTE", "RUN", "SCENE", "SELECTION",
+    "SESSION_FILE", "SESSION_VERSION", "SETTINGS", "CaptureRecord", "Detection", "JobStatus", "Listener",
+    "Notice", "RobotSnapshot", "RouteSnapshot", "RunStatus", "Session", "SessionError", "Settings",
+    "SpawnReport", "Vec3", "merge_observations", "ray_plane",
+]
+
+log = logging.getLogger(__name__)
+
+
+class Session(Persistence, Undo, OperatorRules):
+    """All console state, thread-safe, observable, persisted in one folder (see :class:`Persistence`).
+
+    Args:
+        folder: Session folder (created); saves and capture images go there.
+        start: Where the robot stands initially (world frame [m]); the route starts there.
+        workspace: Planning bounds and resolution.
+        margin: Robot radius [m]: cells this close to an obstacle are dangerous.
+        weights: Aerial-Ground A* layer costs.
+        autosave: Write ``session.json`` after every change.
+    """
+
+    def __init__(
+        self,
+        folder: str | Path,
+        start: Sequence[float] = (2.5, 0.7, 0.0),
+        workspace: Workspace = Workspace(),
+        margin: float = 0.35,
+        weights: CostWeights = CostWeights(),
+        autosave: bool = True,
+    ) -> None:
+        self.folder = Path(folder).expanduser().resolve()
+        self.folder.mkdir(parents=True, exist_ok=True)
+        self._lock = threading.RLock()
+        self._listeners: list[Listener] = []
+        self._autosave = autosave
+        self._workspace = workspace
+        self._margin = margin
+        self._weights = weights
+        self._scene = Scene()
+        self._grid = build_grid(self._scene, workspace, margin)
+        self._route = Route(self._grid, self._floor_point(start), weights)
+        self._mission: Mission | None = None
+        self._capture: CaptureRecord | None = None
+        self._capture_meta: dict[str, Any] | None = None
+        self._robot: RobotSnapshot | None = None
+        self._job = JobStatus()
+        self._run = RunStatus()
+        self._selected: str | None = None
+        self._settings = Settings()
+        self._last_save_error: str | None = None
+        self._restore_problems: list[str] = []
+        self._outbox: list[Notice] = []  # notices raised under the lock, sent by the next _emit
+        self._history = History()
+
+    # --- observers -----------------------------------------------------------------------------
+    def subscribe(self, listener: Listener) -> Callable[[], None]:
+        """Call ``listener(topic, payload)`` on every change; returns the unsubscribe function."""
+        with self._lock:
+            self._listeners.append(listener)
+
+        def unsubscribe() -> None:
+            with self._lock:
+                if listener in self._listeners:
+                    self._listeners.remove(listener)
+
+        return unsubscribe
+
+    def _emit(self, events: Sequence[tuple[str, Any]]) -> None:
+        with self._lock:
+            listeners = list(self._listeners)
+            queued, self._outbox = self._outbox, []
+        for topic, payload in [(NOTICE, n) for n in queued] + list(events):
+            for listener in listeners:
+                try:
+                    listener(topic, payload)
+                except Exception:  # a broken view must not break the session
+                    log.exception("listener failed on %s", topic)
+
+    def notify(self, title: str, body: str, level: str = "info") -> None:
+        """Show a message to every connected operator (and log it)."""
+        getattr(log, "warning" if level in ("warning", "error") else "info")("%s: %s", title, body)
+        self._emit([(NOTICE, Notice(title, body, level))])
+
+    # --- read access (snapshots) ---------------------------------------------------------------
+    @property
+    def workspace(self) -> Workspace:
+        return self._workspace
+
+    @property
+    def margin(self) -> float:
+        return self._margin
+
+    @property
+    def weights(self) -> CostWeights:
+        return self._weights
+
+    @property
+    def scene(self) -> Scene:
+        with self._lock:
+            return self._scene
+
+    @property
+    def grid(self) -> PlanningGrid:
+        with self._lock:
+            return self._grid
+
+    @property
+    def mission(self) -> Mission | None:
+        with self._lock:
+            return self._mission
+
+    @property
+    def capture(self) -> CaptureRecord | None:
+        with self._lock:
+            return self._capture
+
+    @property
+    def robot(self) -> RobotSnapshot | None:
+        with self._lock:
+            return self._robot
+
+    @property
+    def job(self) -> JobStatus:
+        with self._lock:
+            return self._job
+
+    @property
+    def run(self) -> RunStatus:
+        with self._lock:
+            return self._run
+
+    @property
+    def selected(self) -> SceneObject | None:
+        with self._lock:
+            if self._selected is None:
+                return None
+            try:
+                return self._scene.object(self._selected)
+            except KeyError:
+                return None
+
+    @property
+    def settings(self) -> Settings:
+        with self._lock:
+            return self._settings
+
+    def route_snapshot(self) -> RouteSnapshot:
+        """The route as world points, for drawing."""
+        with self._lock:
+            r, g = self._route, self._grid
+            segs = tuple(path_points(seg, g) for seg in r.registered)
+            cand = r.candidate.points(g) if r.candidate is not None else None
+            goals = tuple(tuple(float(v) for v in s[-1]) for s in segs if len(s))
+            return RouteSnapshot(r.start, segs, cand, r.candidate_goal, goals)  # type: ignore[arg-type]
+
+    # --- settings --------------------------------------------------------------------------------
+    def set_goal_mode(self, mode: str, altitude: float | None = None) -> None:
+        """Choose where clicked goals go: ``ground`` or ``altitude`` (height [m] above the floor)."""
+        if mode not in ("ground", "altitude"):
+            raise SessionError(f"goal mode must be 'ground' or 'altitude', got {mode!r}")
+        with self._lock:
+            s = self._settings
+            alt = s.altitude if altitude is None else float(altitude)
+            top = self._workspace.max[2] - self._workspace.floor
+            if not (math.isfinite(alt) and 0.0 < alt < top):
+                raise SessionError(f"altitude must be between 0 and {top:.2f} m above the floor, got {alt}")
+            self._settings = replace(s, goal_mode=mode, altitude=alt)
+        self._emit([(SETTINGS, None)])
+
+    def set_click_to_goal(self, enabled: bool) -> None:
+        with self._lock:
+            self._settings = replace(self._settings, click_to_goal=bool(enabled))
+        self._emit([(SETTINGS, None)])
+
+    def goal_height(self) -> float:
+        """World z [m] of a clicked goal under the current goal mode."""
+        with self._lock:
+            s = self._settings
+            return self._workspace.floor + (s.altitude if s.goal_mode == "altitude" else 0.0)
+
+    # --- route -----------------------------------------------------------------------------------
+    def goal_from_ray(self, origin: Sequence[float], direction: Sequence[float]) -> Vec3:
+        """The goal a click ray picks: its hit with the floor or the chosen altitude (world [m])."""
+        return goal_on_plane(origin, direction, self.goal_height(), self._workspace)
+
+    def add_goal(self, goal: Sequence[float]) -> PlanResult:
+        """Plan a candidate from the last registered node (or the start) to ``goal`` (world [m]).
+
+        On failure the previous candidate stays and the result's message says why.
+        """
+        g = tuple(float(v) for v in goal)
+        if len(g) != 3 or not all(math.isfinite(v) for v in g):
+            return PlanResult(False, f"goal must be 3 finite numbers [m], got {goal!r}")
+        with self._lock:
+            if self._run.active:
+                return PlanResult(False, "a mission is under way (running or paused): abort it, or wait until it is done, before planning")
+            why = self._goal_problem_locked(g)  # type: ignore[arg-type]
+            if why is not None:
+                return PlanResult(False, why)
+            res = self._route.propose(g)
+            if res.ok:
+                self._save_locked()
+        if res.ok:
+            self._emit([(ROUTE, None)])
+        return res
+
+    def register(self) -> str:
+        """Append the candidate to the registered (green) path; returns a message."""
+        with self._lock:
+            if self._route.candidate is None:
+                raise SessionError("there is no candidate path to register: click a goal first")
+            n = len(self._route.candidate.cells)
+            self._route.register()
+            self._mission = None
+            self._save_locked()
+            count = len(self._route.registered)
+        self._emit([(ROUTE, None), (MISSION, None)])
+        return f"segment {count} registered ({n} cells)"
+
+    def discard(self) -> None:
+        """Drop the candidate path."""
+        with self._lock:
+            self._route.discard()
+            self._save_locked()
+        self._emit([(ROUTE, None)])
+
+    def undo(self) -> str:
+        """Remove the last registered segment."""
+        with self._lock:
+            if not self._route.undo():
+                raise SessionError("nothing to undo: no registered segment")
+            self._mission = None
+            self._save_locked()
+            left = len(self._route.registered)
+        self._emit([(ROUTE, None), (MISSION, None)])
+        return f"last segment removed, {left} left"
+
+    def clear_route(self) -> None:
+        """Remove the candidate, every registered segment and the mission."""
+        with self._lock:
+            if self._run.active:
+                raise SessionError("a mission is running: abort it before clearing the route")
+            self._route.clear()
+            self._mission = None
+            self._sync_start_locked()
+            self._save_locked()
+        self._emit([(ROUTE, None), (MISSION, None)])
+
+    def build_mission(self) -> Mission:
+        """Turn the registered path into a mission (walk / take-off / fly / land segments)."""
+        with self._lock:
+            if not self._route.registered:
+                raise SessionError("register at least one path segment before building the mission")
+            mission = self._build_locked()  # may start in the air (console.session.operator_state)
+            self._mission = mission
+            self._save_locked()
+        self._emit([(MISSION, None)])
+        return mission
+
+    # --- scene -----------------------------------------------------------------------------------
+    def spawn(self, scene: Scene, origin: str = "") -> SpawnReport:
+        """Add world-frame objects (re-sightings update the known object), rebuild the grid, replan.
+
+        Raises :class:`SessionError` naming the field of an implausible object; nothing changes then.
+        """
+        what = f" from {origin}" if origin else ""
+        self.check_plausible(scene, f"refused{what}")
+        key = origin.replace(" ", ":", 1) if origin.startswith("capture ") else ""  # one undo step with set_capture
+        with self._lock:
+            merged, added, updated = merge_observations(self._scene, scene)
+            notes = self._set_scene_locked(merged, f"spawn{what}", key)
+        log.info("spawned %d new and %d updated objects%s", len(added), len(updated), what)
+        self._emit([(SCENE, None), (GRID, None), (ROUTE, None), (MISSION, None)])
+        return SpawnReport(tuple(added), tuple(updated), tuple(notes))
+
+    def delete_object(self, object_id: str) -> list[str]:
+        """Remove an object from the map; the grid is rebuilt and the route re-checked."""
+        with self._lock:
+            try:
+                self._scene.object(object_id)
+            except KeyError:
+                raise SessionError(f"no object {object_id!r} in the map (was it deleted in another tab?)") from None
+            scene = self._scene.with_objects([o for o in self._scene.objects if o.id != object_id])
+            notes = self._set_scene_locked(scene, f"delete {object_id}")
+        self._emit([(SCENE, None), (GRID, None), (ROUTE, None), (MISSION, None), (SELECTION, None)])
+        return notes
+
+    def move_object(self, object_id: str, position: Sequence[float], yaw: float | None = None) -> list[str]:
+        """Put an object at ``position`` (box centre, world [m]) and heading ``yaw`` [rad]."""
+        p = tuple(float(v) for v in position)
+        if len(p) != 3 or not all(math.isfinite(v) for v in p):
+            raise SessionError(f"position must be 3 finite numbers [m], got {position!r}")
+        if yaw is not None and not math.isfinite(yaw):
+            raise SessionError(f"yaw must be a finite number [rad], got {yaw!r}")
+        ws = self._workspace
+        if not all(ws.min[a] - 1.0 <= p[a] <= ws.max[a] + 1.0 for a in range(3)):
+            raise SessionError(f"position {fmt_point(p)} is far outside the workspace {fmt_point(ws.min)}..{fmt_point(ws.max)}")
+        with self._lock:
+            try:
+                obj = self._scene.object(object_id)
+            except KeyError:
+                raise SessionError(f"no object {object_id!r} in the map (was it deleted in another tab?)") from None
+            objs = [obj.moved(p, yaw) if o.id == object_id else o for o in self._scene.objects]  # type: ignore[arg-type]
+            notes = self._set_scene_locked(self._scene.with_objects(objs), f"move {object_id}")
+        self._emit([(SCENE, None), (GRID, None), (ROUTE, None), (MISSION, None), (SELECTION, object_id)])
+        return notes
+
+    def select(self, object_id: str | None) -> None:
+        """Select an object (``None`` clears the selection)."""
+        with self._lock:
+            if object_id is not None:
+                try:
+                    self._scene.object(object_id)
+                except KeyError:
+                    raise SessionError(f"no object {object_id!r} in the map") from None
+            self._selected = object_id
+        self._emit([(SELECTION, object_id)])
+
+    def check_plausible(self, scene: Scene, what: str = "refused") -> None:
+        """Raise :class:`SessionError` (``what: objects[0].size[0]: ...``) for objects no room holds."""
+        ws = self._workspace
+        try:
+            check_plausible(scene, ws.min, ws.max)
+        except SceneError as exc:
+            raise SessionError(f"{what}: {exc}") from None
+
+    def _set_scene_locked(self, scene: Scene, label: str, key: str = "") -> list[str]:
+        """Swap in ``scene`` (undoably, as ``label``); warns every tab when registered segments are lost."""
+        try:
+            grid = build_grid(scene, self._workspace, self._margin)
+        except GridError as exc:
+            raise SessionError(f"cannot build the planning grid: {exc}") from None
+        self._remember_locked(label, key)
+        old_grid, had_mission = self._grid, self._mission is not None
+        goals = [tuple(path_points(seg, old_grid)[-1]) for seg in self._route.registered if len(seg)]
+        self._scene = scene
+        self._grid = grid
+        notes = self._route.set_grid(grid)
+        self._mission = self._mission_after_edit_locked()
+        kept = len(self._route.registered)
+        if kept < len(goals):
+            one = kept + 1 == len(goals)
+            segs = f"segment {kept + 1}" if one else f"segments {kept + 1}-{len(goals)}"
+            to = ", ".join(fmt_point(g) for g in goals[kept:])
+            self._outbox.append(Notice(
+                "Route segments removed",
+                f"{label}: registered {segs} (to {to}) now "
+                + ("crosses obstacles and was removed" if one else "cross obstacles and were removed")
+                + ("; the mission was retired" if had_mission and self._mission is None else "")
+                + (". Undo brings it back." if one else ". Undo brings them back."), "warning"))
+        if self._selected is not None and self._selected not in {o.id for o in scene.objects}:
+            self._selected = None
+        self._save_locked()
+        return notes
+
+    # --- capture, robot, jobs ------------------------------------------------------------------
+    def set_capture(self, record: CaptureRecord) -> None:
+        """Show a new capture (photo, detections, depth, camera pose); saved with the session."""
+        with self._lock:
+            self._remember_locked(f"capture {record.id}", f"capture:{record.id}")
+            self._capture = record
+            self._capture_meta = self._store_capture_locked(record)
+            self._save_locked()
+        self._emit([(CAPTURE, record)])
+
+    def set_robot(self, state: RobotSnapshot) -> None:
+        """Record the robot's live state; an idle route start follows the robot on the ground."""
+        with self._lock:
+            self._robot = state
+            moved = self._sync_start_locked()
+            if moved:
+                self._save_locked()
+        events: list[tuple[str, Any]] = [(ROBOT, state)]
+        if moved:
+            events.append((ROUTE, None))
+        self._emit(events)
+
+    def set_job(self, status: JobStatus, *, background: bool = False) -> bool:
+        """Show a job's progress to every tab; ``True`` if shown.
+
+        ``background=True`` (a job nobody asked for, e.g. the start-up model loading) never replaces
+        another job's status: once a capture has reported, the bar is the capture's.
+        """
+        with self._lock:
+            if background and self._job.name not in ("", status.name):
+                return False
+            self._job = status
+        self._emit([(JOB, status)])
+        return True
+
+    def set_run(self, status: RunStatus) -> None:
+        with self._lock:
+            self._run = status
+        self._emit([(RUN, status)])
+
+    def complete_mission(self) -> None:
+        """The mission was flown: retire its route and mission, start again under the robot."""
+        with self._lock:
+            self._route.clear()
+            self._mission = None
+            self._run = replace(self._run, state="done") if self._run.active else self._run
+            self._sync_start_locked()
+            self._save_locked()
+        self._emit([(ROUTE, None), (MISSION, None)])
+
+    def _sync_start_locked(self) -> bool:
+        """The route starts at the robot (rules in :mod:`console.session.operator_state`); True if it changed."""
+        return self._follow_robot_locked()
+
+    def _floor_point(self, p: Sequence[float]) -> Vec3:
+        return (float(p[0]), float(p[1]), self._workspace.floor)

@@ -1,0 +1,486 @@
+"""Session files: the ``session.json`` format, reading, checking and writing it, safe file names,
+and :class:`Persistence`, the save / load / restore half of :class:`~console.session.session.Session`.
+
+A session file holds the scene, route, mission, settings and the last capture's metadata, all in the
+world frame [m]. Names typed by the operator are resolved with :func:`resolve_name`, which refuses
+anything that would land outside the session folder.
+
+Restore rules: a file that is not a session, or whose scene is malformed or implausible, is refused
+as a whole (naming the field). Otherwise each other part (route, mission, settings, last capture)
+is checked like the scene (every number finite, the field named) and a bad part is dropped while
+the valid parts are restored; the reasons are kept in :attr:`Persistence.restore_problems` for the
+page, and ``session.json`` itself is first copied aside as ``session.json.unreadable-<time>``. A
+file that cannot be restored at all is moved aside the same way; if it cannot be (a read-only
+folder) :class:`SessionError` says what to do (``--fresh`` or another ``--session``).
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+import math
+import re
+import shutil
+import time
+from dataclasses import dataclass, replace
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from pipeline.scene import Scene, SceneError, check_plausible, scene_from_dict, scene_to_dict, write_text_atomic
+from planner.grid import Workspace, build_grid
+from planner.mission import Mission, MissionError
+from planner.route import Route
+
+from console.session.capture_files import read_capture_files, write_capture_files
+from console.session.session_types import CaptureRecord, Notice, SessionError, Settings
+from console.session.topics import CAPTURE, GRID, MISSION, ROUTE, SCENE, SELECTION, SETTINGS
+
+if TYPE_CHECKING:
+    from console.session.session import Session
+
+log = logging.getLogger(__name__)
+
+SESSION_VERSION = 1
+SESSION_FILE = "session.json"
+
+_NAME_OK = re.compile(r"^[A-Za-z0-9_.\-/ ]+$")
+
+
+def resolve_name(folder: Path, name: str) -> Path:
+    """The file in the session ``folder`` a typed name refers to (``.json`` added if missing).
+
+    Raises :class:`SessionError` for empty names, absolute paths, odd characters, and any name
+    that resolves (through ``..`` or symbolic links) outside the session folder.
+    """
+    text = (name or "").strip()
+    if not text:
+        raise SessionError("type a file name (it is saved in the session folder)")
+    if len(text) > 120:
+        raise SessionError("file name too long (120 characters at most)")
+    if text.startswith(("/", "~")) or re.match(r"^[A-Za-z]:", text) or "\\" in text:
+        raise SessionError(f"{text!r}: give a name inside the session folder, not an absolute path")
+    if not _NAME_OK.match(text):
+        raise SessionError(f"{text!r}: use letters, digits, spaces, '_', '-', '.' and '/' only")
+    if any(part in ("..", ".") for part in Path(text).parts) or text in (".", ".."):
+        raise SessionError(f"{text!r}: '..' and '.' are not allowed; names stay inside the session folder")
+    if any(part.startswith(".") for part in Path(text).parts):
+        raise SessionError(f"{text!r}: names may not start with '.'")
+    if not text.endswith(".json"):
+        text += ".json"
+    target = (folder / text).resolve()
+    if not target.is_relative_to(folder) or target == folder:
+        raise SessionError(f"{name!r} resolves outside the session folder {folder}")
+    return target
+
+
+def list_saves(folder: Path) -> list[str]:
+    """Names of the session files in ``folder`` (newest first)."""
+    files = [p for p in folder.glob("*.json") if not p.name.startswith(".")]
+    files.sort(key=lambda p: p.stat().st_mtime, reverse=True)
+    return [p.name for p in files]
+
+
+def session_to_dict(
+    workspace: Workspace,
+    margin: float,
+    scene: Scene,
+    route: Route,
+    mission: Mission | None,
+    settings: Settings,
+    last_capture: dict[str, Any] | None,
+) -> dict[str, Any]:
+    """The persistent session state as a JSON-ready dict (the ``session.json`` format)."""
+    ws = workspace
+    return {
+        "version": SESSION_VERSION,
+        "kind": "morphonavi-session",
+        "saved": time.time(),
+        "frame": "world",
+        "workspace": {"min": list(ws.min), "max": list(ws.max), "resolution": ws.resolution},
+        "margin": margin,
+        "scene": scene_to_dict(scene),
+        "route": route.to_dict(),
+        "mission": None if mission is None else mission.to_dict(),
+        "settings": {"goal_mode": settings.goal_mode, "altitude": settings.altitude},
+        "last_capture": last_capture,
+    }
+
+
+def write_session_file(path: Path, data: dict[str, Any]) -> None:
+    """Write a session dict to ``path`` atomically; raises ``OSError``, ``TypeError`` or ``ValueError``."""
+    write_text_atomic(path, json.dumps(data, indent=1, allow_nan=False) + "\n")  # never write a NaN
+
+
+def read_session_file(path: Path, folder: Path) -> Any:
+    """The parsed JSON of the session file ``path`` in ``folder``; :class:`SessionError` if unreadable."""
+    try:
+        return json.loads(path.read_text(encoding="utf-8"))
+    except FileNotFoundError:
+        raise SessionError(f"no saved session {path.name!r} in {folder}") from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise SessionError(f"cannot read {path.name}: {exc}") from None
+    except json.JSONDecodeError as exc:
+        raise SessionError(f"{path.name} is not valid JSON (line {exc.lineno}): {exc.msg}") from None
+
+
+def _non_finite(value: Any, path: str) -> str | None:
+    """The path of the first non-finite number inside ``value`` (``route.start[2]``), or ``None``."""
+    if isinstance(value, float) and not math.isfinite(value):
+        return path
+    if isinstance(value, dict):
+        for k, v in value.items():
+            found = _non_finite(v, f"{path}.{k}")
+            if found:
+                return found
+    elif isinstance(value, list):
+        for i, v in enumerate(value):
+            found = _non_finite(v, f"{path}[{i}]")
+            if found:
+                return found
+    return None
+
+
+def _check_finite(value: Any, path: str) -> None:
+    bad = _non_finite(value, path)
+    if bad is not None:
+        raise SceneError(bad, "must be finite")
+
+
+def _is_number(v: Any) -> bool:
+    return isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
+
+
+def check_route(route: Any, workspace: Workspace | None = None) -> None:
+    """Check a saved ``route`` entry (points inside ``workspace``); raises :class:`SceneError` naming the bad field."""
+    if not isinstance(route, dict):
+        raise SceneError("route", f"must be an object, got {type(route).__name__}")
+    _check_finite(route, "route")
+    start = route.get("start")
+    if not isinstance(start, list) or len(start) != 3 or not all(_is_number(v) for v in start):
+        raise SceneError("route.start", f"must be 3 finite numbers [m], got {start!r}")
+    segs = route.get("registered", [])
+    if not isinstance(segs, list):
+        raise SceneError("route.registered", "must be a list of segments")
+    for i, seg in enumerate(segs):
+        if not isinstance(seg, list):
+            raise SceneError(f"route.registered[{i}]", "must be a list of [i, j, k] cells")
+        for j, cell in enumerate(seg):
+            if (not isinstance(cell, list) or len(cell) != 3
+                    or not all(isinstance(c, int) and not isinstance(c, bool) and c >= 0 for c in cell)):
+                raise SceneError(f"route.registered[{i}][{j}]", f"must be 3 cell indices >= 0, got {cell!r}")
+    goal = route.get("candidate_goal")
+    if goal is not None and (not isinstance(goal, list) or len(goal) != 3 or not all(_is_number(v) for v in goal)):
+        raise SceneError("route.candidate_goal", f"must be 3 finite numbers [m] or null, got {goal!r}")
+    if workspace is not None:
+        for name, p in (("start", start), ("candidate_goal", goal)):
+            if p is not None and not workspace.contains(p):
+                raise SceneError(f"route.{name}", f"{p} lies outside the workspace {list(workspace.min)}..{list(workspace.max)} [m]")
+
+
+@dataclass(frozen=True)
+class SavedSession:
+    """The checked parts of a session file.
+
+    Attributes:
+        scene: Scene (world frame), checked and plausible for the workspace.
+        mission: Saved mission, or ``None`` (none saved, or dropped: see ``problems``).
+        goal_mode: ``ground`` or ``altitude``.
+        altitude: Goal altitude above the floor [m].
+        route: Checked ``route`` entry (restored onto the rebuilt grid by the session), or ``None``.
+        last_capture: Checked ``last_capture`` metadata, or ``None``.
+        problems: Why parts were dropped (bad values, the field named); the file deserves keeping aside.
+        notes: Other things the operator should know (e.g. a route for another workspace dropped).
+    """
+
+    scene: Scene
+    mission: Mission | None
+    goal_mode: str
+    altitude: float
+    route: dict[str, Any] | None
+    last_capture: dict[str, Any] | None
+    problems: tuple[str, ...] = ()
+    notes: tuple[str, ...] = ()
+
+
+def parse_saved(data: Any, where: str, workspace: Workspace | None = None) -> SavedSession:
+    """Check a loaded session file part by part (``where`` names the file).
+
+    Raises :class:`SessionError` naming the bad field when the file is not a session or its scene is
+    malformed or implausible for ``workspace``; other bad parts are dropped and listed in ``problems``.
+    """
+    if not isinstance(data, dict) or data.get("kind") != "morphonavi-session":
+        raise SessionError(f"{where} is not a MorphoNavi session file")
+    if data.get("version") != SESSION_VERSION:
+        raise SessionError(f"{where}: version {data.get('version')!r} is not supported (expected {SESSION_VERSION})")
+    try:
+        scene = scene_from_dict(data.get("scene") or {"version": 1})
+        if workspace is not None:
+            check_plausible(scene, workspace.min, workspace.max)
+    except SceneError as exc:
+        raise SessionError(f"{where}: scene.{exc}") from None
+    for o in scene.objects:
+        if o.frame != "world":
+            raise SessionError(f"{where}: scene object {o.id!r} is in the {o.frame} frame, expected world")
+    problems: list[str] = []
+    notes: list[str] = []
+
+    route: dict[str, Any] | None = None
+    route_raw = data.get("route")
+    if route_raw is not None:
+        try:
+            check_route(route_raw, workspace)
+            route = route_raw
+        except SceneError as exc:
+            problems.append(f"{exc}: the route was not restored")
+    ws_raw = data.get("workspace") or {}
+    if route is not None and workspace is not None and not same_workspace(ws_raw if isinstance(ws_raw, dict) else {}, workspace):
+        route = None
+        notes.append("the saved route was planned on a different workspace grid and was dropped")
+
+    mission: Mission | None = None
+    if data.get("mission") is not None:
+        try:
+            _check_finite(data["mission"], "mission")
+            mission = Mission.from_dict(data["mission"])
+        except SceneError as exc:
+            problems.append(f"{exc}: the mission was not restored (build it again)")
+        except MissionError as exc:
+            problems.append(f"mission.{exc}: the mission was not restored (build it again)")
+        except (TypeError, ValueError) as exc:  # e.g. a 'created' time that is not a number
+            problems.append(f"mission: {exc}: the mission was not restored (build it again)")
+    if mission is not None and route is None:
+        mission = None
+        notes.append("the mission was dropped with its route")
+
+    mode, alt = "ground", 1.5
+    settings = data.get("settings") or {}
+    top = None if workspace is None else workspace.max[2] - workspace.floor
+    s_mode = settings.get("goal_mode", mode) if isinstance(settings, dict) else None
+    s_alt = settings.get("altitude", alt) if isinstance(settings, dict) else None
+    if s_mode not in ("ground", "altitude"):
+        problems.append(f"settings.goal_mode: must be 'ground' or 'altitude', got {s_mode!r}: ground goals are used")
+    else:
+        mode = s_mode
+    if not _is_number(s_alt) or not (s_alt > 0 and (top is None or s_alt < top)):
+        problems.append(f"settings.altitude: must be a finite height above the floor [m]"
+                        f"{'' if top is None else f' below {top:g}'}, got {s_alt!r}: {alt} m is used")
+    else:
+        alt = float(s_alt)
+
+    capture: dict[str, Any] | None = None
+    cap_raw = data.get("last_capture")
+    if cap_raw is not None:
+        bad = _non_finite(cap_raw, "last_capture")
+        if not isinstance(cap_raw, dict):
+            problems.append("last_capture: must be an object: the last capture was not restored")
+        elif bad is not None:
+            problems.append(f"{bad}: must be finite: the last capture was not restored")
+        else:
+            capture = cap_raw
+    return SavedSession(scene, mission, mode, alt, route, capture, tuple(problems), tuple(notes))
+
+
+def same_workspace(saved: dict[str, Any], ws: Workspace) -> bool:
+    """Whether a saved ``workspace`` entry describes ``ws`` exactly (bounds and resolution)."""
+    return (saved.get("min") == list(ws.min) and saved.get("max") == list(ws.max)
+            and saved.get("resolution") == ws.resolution)
+
+
+def keep_aside(path: Path, reason: str, move: bool) -> Path:
+    """Move (or copy) a bad session file to ``<name>.unreadable-<time>`` beside it; returns the new path.
+
+    Raises :class:`SessionError` saying what to do when the folder does not allow it.
+    """
+    kept = path.with_name(f"{path.name}.unreadable-{time.strftime('%Y%m%d-%H%M%S')}")
+    n = 1
+    while kept.exists():
+        n += 1
+        kept = path.with_name(f"{path.name}.unreadable-{time.strftime('%Y%m%d-%H%M%S')}-{n}")
+    try:
+        if move:
+            path.replace(kept)
+        else:
+            shutil.copy2(path, kept)
+    except OSError as exc:
+        raise SessionError(
+            f"the session in {path.parent} is corrupt ({reason}) and cannot be kept aside "
+            f"({exc.strerror or exc}): start with --fresh to begin with an empty map (the file is left "
+            f"as it is and nothing is saved over it while the folder stays read-only), or with "
+            f"--session DIR to use another folder") from None
+    return kept
+
+
+class Persistence:
+    """The save / load / restore half of :class:`~console.session.session.Session` (mixed into it).
+
+    Uses the session's lock and state; every restored value is checked by :func:`parse_saved` and
+    the scene by :func:`pipeline.scene.check_plausible` for the session's workspace.
+    """
+
+    # --- names, listing, writing ---------------------------------------------------------------
+    def resolve_name(self: "Session", name: str) -> Path:
+        """The session-folder file a typed name refers to (``.json`` added if missing).
+
+        Raises :class:`SessionError` for empty names, absolute paths, odd characters, and any name
+        that resolves (through ``..`` or symbolic links) outside the session folder.
+        """
+        return resolve_name(self.folder, name)
+
+    def list_saves(self: "Session") -> list[str]:
+        """Names of the session files in the session folder (newest first)."""
+        return list_saves(self.folder)
+
+    def to_dict(self: "Session") -> dict[str, Any]:
+        """The whole persistent state as a JSON-ready dict."""
+        with self._lock:
+            return session_to_dict(self._workspace, self._margin, self._scene, self._route,
+                                   self._mission, self._settings, self._capture_meta)
+
+    def save(self: "Session", name: str | None = None) -> Path:
+        """Write the session to ``session.json`` or to the typed ``name`` in the session folder."""
+        path = self.folder / SESSION_FILE if name is None else self.resolve_name(name)
+        with self._lock:
+            data = self.to_dict()
+        try:
+            write_session_file(path, data)
+        except (OSError, ValueError) as exc:
+            raise SessionError(f"cannot write {path.name}: {exc}") from None
+        return path
+
+    @property
+    def save_error(self: "Session") -> str | None:
+        """Why the last autosave failed (changes are not being saved), or ``None`` when saving works."""
+        with self._lock:
+            return self._last_save_error
+
+    @property
+    def restore_problems(self: "Session") -> tuple[str, ...]:
+        """What the last restore at start-up could not bring back, and why (for the page)."""
+        with self._lock:
+            return tuple(self._restore_problems)
+
+    def _save_locked(self: "Session") -> None:
+        """Autosave; a failure (or a recovery) is announced to every tab once, not once per save."""
+        if not self._autosave:
+            return
+        path = self.folder / SESSION_FILE
+        try:
+            write_session_file(path, self.to_dict())
+        except (OSError, TypeError, ValueError) as exc:  # keep working; tell the operators once
+            if self._last_save_error is None:
+                log.error("autosave to %s failed: %s", path, exc)
+                self._outbox.append(Notice(
+                    "Changes are not being saved",
+                    f"writing {path} failed: {exc}. The console keeps working, but a restart will lose the "
+                    "changes: make the folder writable (the next change then saves everything) or free some disk space.",
+                    "error"))
+            self._last_save_error = str(exc)
+            return
+        if self._last_save_error is not None:
+            self._outbox.append(Notice("Saving again", f"{path.name} is written after every change again", "success"))
+        self._last_save_error = None
+
+    def _store_capture_locked(self: "Session", rec: CaptureRecord) -> dict[str, Any] | None:
+        """Write the capture's files; their metadata, or ``None`` (logged) if they cannot be stored."""
+        try:
+            return write_capture_files(self.folder, rec)
+        except OSError as exc:
+            log.error("cannot store capture %s: %s", rec.id, exc)
+            return None
+
+    # --- loading -------------------------------------------------------------------------------
+    def load(self: "Session", name: str | None = None) -> list[str]:
+        """Replace the state with a saved session; returns notes about what could not be kept.
+
+        Raises :class:`SessionError` naming the bad field when the file cannot be used at all; the
+        current state is then left untouched. Bad parts of a usable file are dropped and named in
+        the notes. A load can be undone (:meth:`~console.session.session.Session.undo_edit`).
+        """
+        path = self.folder / SESSION_FILE if name is None else self.resolve_name(name)
+        if self.run.active:
+            raise SessionError("a mission is under way: abort it before loading another session")
+        saved = parse_saved(read_session_file(path, self.folder), path.name, self._workspace)
+        notes = self._apply_saved(saved, path.name, remember=f"load {path.name}")
+        self._emit_all()
+        return notes
+
+    def restore_last(self: "Session") -> list[str] | None:
+        """Restore ``session.json`` at start-up; ``None`` if nothing was restored.
+
+        A file that cannot be used is moved aside (``session.json.unreadable-<time>``) and the
+        session starts empty; a partly bad one is copied aside and its valid parts restored. Either
+        way the reasons are in :attr:`restore_problems`. Raises :class:`SessionError` (saying what
+        to do) only when a bad file cannot be kept aside, e.g. in a read-only folder.
+        """
+        path = self.folder / SESSION_FILE
+        if not path.exists():
+            return None
+        try:
+            saved = parse_saved(read_session_file(path, self.folder), path.name, self._workspace)
+        except SessionError as exc:
+            kept = keep_aside(path, str(exc), move=True)
+            log.error("the last session could not be restored (%s); it was kept as %s and the console "
+                      "starts empty", exc, kept.name)
+            with self._lock:
+                self._restore_problems = [str(exc), f"the file was kept as {kept.name}; the console started empty"]
+            return None
+        problems = list(saved.problems)
+        if problems:
+            try:
+                kept = keep_aside(path, "; ".join(problems), move=False)
+                problems.append(f"the file as it was is kept as {kept.name}")
+            except SessionError:
+                problems.append("the file as it was could not be copied aside (read-only folder?)")
+            log.error("the last session was restored in part: %s", "; ".join(problems))
+        notes = self._apply_saved(saved, path.name, remember=None)
+        with self._lock:
+            self._restore_problems = problems
+        self._emit_all()
+        return notes
+
+    def _emit_all(self: "Session") -> None:
+        cap = self.capture
+        self._emit([(SCENE, None), (GRID, None), (ROUTE, None), (MISSION, None), (SETTINGS, None),
+                    (SELECTION, None)] + ([(CAPTURE, cap)] if cap is not None else []))
+
+    def _apply_saved(self: "Session", saved: SavedSession, where: str, remember: str | None) -> list[str]:
+        """Swap the checked parts in; returns the problems and notes for the operator."""
+        notes = list(saved.problems) + list(saved.notes)
+        mission = saved.mission
+        with self._lock:
+            grid = build_grid(saved.scene, self._workspace, self._margin)
+            route = Route(grid, self._route.start, self._weights)
+            if saved.route is not None:
+                try:
+                    notes += route.restore(saved.route)
+                except (KeyError, TypeError, ValueError, IndexError) as exc:
+                    notes.append(f"{where}: route could not be restored ({exc}); the route and mission were dropped")
+                    route, mission = Route(grid, self._route.start, self._weights), None
+            if remember is not None:
+                self._remember_locked(remember)
+            self._scene, self._grid, self._route, self._mission = saved.scene, grid, route, mission
+            self._selected = None
+            self._settings = replace(self._settings, goal_mode=saved.goal_mode, altitude=saved.altitude)
+            self._capture, self._capture_meta = None, None
+            if saved.last_capture is not None:
+                try:
+                    self._capture = read_capture_files(self.folder, saved.last_capture)
+                    self._capture_meta = saved.last_capture
+                except (KeyError, TypeError, ValueError, AttributeError, OSError) as exc:
+                    notes.append(f"the last capture could not be restored: {exc}")
+            self._save_locked()
+        return notes
+
+    def status_text(self: "Session") -> tuple[str, bool]:
+        """What the page says about saving and the last restore, and whether it is a warning."""
+        with self._lock:
+            err, problems, auto = self._last_save_error, list(self._restore_problems), self._autosave
+        if err is not None:
+            parts = [f"Changes are NOT being saved: {err}. A restart will lose them."]
+        elif auto:
+            parts = ["The session is saved after every change and restored at start."]
+        else:
+            parts = ["Changes are not saved automatically (autosave off)."]
+        if problems:
+            parts.append("The last session was restored in part: " + "; ".join(problems) + ".")
+        return " ".join(parts), bool(err is not None or problems)

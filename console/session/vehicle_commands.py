@@ -1,0 +1,98 @@
+"""Vehicle commands outside missions: Hold, Land here, Return, Disarm.
+
+Whether a command applies (and why not) is decided by the session's operator rules
+(:func:`console.session.operator_state.vehicle_commands`); this class carries a command out over the robot
+link. Land here and Return are flown as small missions through the mission manager (so they have
+progress, Pause / Abort and the link-loss failsafe like any mission); Hold and Disarm go straight
+to the link (:meth:`~console.link.base.RobotLink.hold`, :meth:`~console.link.base.RobotLink.disarm`),
+so the simulator and MAVLink vehicles both do them.
+
+At critical battery (:data:`console.session.operator_state.BATTERY_CRITICAL`) the session calls
+:meth:`VehicleCommands.battery_land`: the running mission is aborted and the robot lands where it
+is through the same Land here path.
+"""
+
+from __future__ import annotations
+
+import logging
+import time
+from typing import Any
+
+from console.session.session import Session, SessionError
+
+log = logging.getLogger(__name__)
+
+LABELS = {"hold": "Hold", "land": "Land here", "return": "Return", "disarm": "Disarm"}
+"""The button label of each command."""
+
+
+class VehicleCommands:
+    """Carries out the vehicle commands for every tab.
+
+    Args:
+        session: The state (its rules say what applies).
+        link: The robot link (``hold()``, ``disarm()``), or ``None``.
+        runner: The mission runner (``execute(mission, command=...)``), or ``None``.
+    """
+
+    def __init__(self, session: Session, link: Any, runner: Any) -> None:
+        self._session = session
+        self._link = link
+        self._runner = runner
+        if runner is not None:  # the console's commands (a view's read-only copy has no runner)
+            session.attach_battery_land(self.battery_land)
+
+    def battery_land(self, timeout: float = 60.0) -> None:
+        """Critical battery: end the running mission (the manager's abort; the robot holds) and
+        land here. Blocking (the session runs it on its own thread); tells every tab the outcome."""
+        run = self._session.run
+        if run.active and self._runner is not None:
+            try:
+                self._runner.abort()
+            except Exception as exc:  # ended meanwhile
+                log.info("battery critical: abort: %s", exc)
+            end = time.monotonic() + timeout  # the manager reports the end asynchronously
+            while self._session.run.active and time.monotonic() < end:
+                time.sleep(0.05)
+        try:
+            msg = self.run("land")
+        except SessionError as exc:
+            self._session.notify("Battery critical", f"cannot land here automatically: {exc}", "error")
+            return
+        self._session.notify("Battery critical", f"the mission was ended; {msg}", "warning")
+
+    def _check(self, name: str) -> None:
+        state = self._session.operator_state(self._runner is not None).commands.get(name)
+        if state is None or not state.shown:
+            raise SessionError(f"{LABELS[name]} applies only while the robot is armed or off the ground")
+        if not state.enabled:
+            raise SessionError(f"{LABELS[name]} is not possible now: {state.reason}")
+
+    def run(self, name: str) -> str:
+        """Carry out command ``name`` (``hold``, ``land``, ``return``, ``disarm``); returns a message
+        for the operator. Raises :class:`SessionError` with the reason when it does not apply or the
+        robot refuses."""
+        if name not in LABELS:
+            raise SessionError(f"unknown vehicle command {name!r}; expected one of {', '.join(LABELS)}")
+        self._check(name)
+        try:
+            if name == "hold":
+                self._need(self._link, "robot link").hold()
+                return "the robot holds where it is"
+            if name == "disarm":
+                self._need(self._link, "robot link").disarm()
+                return "motors disarmed"
+            mission = self._session.land_mission() if name == "land" else self._session.return_mission()
+            self._need(self._runner, "mission manager").execute(mission, command=LABELS[name])
+        except SessionError:
+            raise
+        except Exception as exc:  # the link or the manager refused: say why
+            raise SessionError(f"{LABELS[name]} refused: {exc}") from None
+        spot = mission.segments[-1].end
+        return f"{LABELS[name].lower()}: landing at ({spot[0]:.2f}, {spot[1]:.2f})"
+
+    @staticmethod
+    def _need(thing: Any, what: str) -> Any:
+        if thing is None:
+            raise SessionError(f"this console has no {what}")
+        return thing

@@ -1,0 +1,170 @@
+"""The workspace and its planning grid in the 3D view.
+
+Draws the floor, the workspace bounds and the grid cells as three separately toggleable layers:
+occupied (red), dangerous (yellow) and free (blue), each one batched mesh so tens of thousands of
+cells stay fluid. Free cells are drawn on the goal layer only (the floor, or the chosen goal
+altitude): that is the layer a click puts a goal on, and a full 3D lattice of free cells would
+hide everything else. All positions are world frame (z up) [m].
+"""
+
+from __future__ import annotations
+
+import threading
+from typing import Any
+
+import numpy as np
+import trimesh
+import viser
+
+from planner.grid import CellState, PlanningGrid
+
+from console.session.session import GRID, SETTINGS, Session
+
+OCCUPIED_RGB = (220, 50, 47)
+DANGEROUS_RGB = (240, 190, 30)
+FREE_RGB = (70, 130, 230)
+
+_LAYERS: tuple[tuple[str, CellState, tuple[int, int, int], float, float], ...] = (
+    # name, state, colour, size as a fraction of the cell, opacity
+    ("occupied", CellState.OCCUPIED, OCCUPIED_RGB, 0.32, 0.75),
+    ("dangerous", CellState.DANGEROUS, DANGEROUS_RGB, 0.2, 0.75),
+    ("free", CellState.FREE, FREE_RGB, 0.22, 0.7),
+)
+
+
+def layer_cells(grid: PlanningGrid, state: CellState, max_height: float | None = None,
+                level: int | None = None) -> np.ndarray:
+    """World centres [m] (N x 3) of the cells in ``state``.
+
+    Args:
+        grid: The planning grid.
+        state: Which cells.
+        max_height: Only cells whose bottom is below this height above the floor [m].
+        level: Only cells of this layer index (0 = ground).
+    """
+    idx = np.argwhere(grid.state == state)
+    ws = grid.workspace
+    if max_height is not None and len(idx):
+        bottom = ws.floor + idx[:, 2] * ws.resolution
+        idx = idx[bottom < ws.floor + max_height - 1e-9]
+    if level is not None and len(idx):
+        idx = idx[idx[:, 2] == level]
+    return ws.centers(idx)
+
+
+class GridView:
+    """Floor, bounds and the occupied / dangerous / free cell layers.
+
+    Args:
+        server: The viser server (scene and GUI shared by every tab).
+        session: The state it draws.
+    """
+
+    def __init__(self, server: viser.ViserServer, session: Session) -> None:
+        self._server = server
+        self._session = session
+        self._lock = threading.Lock()
+        self._cube = trimesh.creation.box(extents=(1.0, 1.0, 1.0))
+        self._handles: dict[str, Any] = {}
+        ws = session.workspace
+        self._checks: dict[str, viser.GuiCheckboxHandle] = {}
+        defaults = {"occupied": True, "dangerous": True, "free": True}
+        hints = {
+            "occupied": "Cells inside an obstacle: impassable (red)",
+            "dangerous": "Cells within the robot's margin of an obstacle: high cost (yellow)",
+            "free": "Free cells of the goal layer (the floor, or the goal altitude): where a click puts a goal",
+        }
+        self._counts = server.gui.add_markdown("")
+        with server.gui.add_folder("Layers", expand_by_default=False) as folder:
+            self.layers_folder = folder
+            """The folder holding the layer toggles; other views may add their toggles to it."""
+            for name, _, _, _, _ in _LAYERS:
+                cb = server.gui.add_checkbox(f"{name.capitalize()} cells", defaults[name], hint=hints[name])
+                cb.on_update(lambda _e: self.redraw())
+                self._checks[name] = cb
+            top = ws.max[2] - ws.floor
+            self._height = server.gui.add_slider(
+                "Cells up to [m]", min=ws.resolution, max=top, step=ws.resolution, initial_value=top,
+                hint="Hide occupied and dangerous cells above this height (metres above the floor)",
+            )
+        self._height.on_update(lambda _e: self.redraw())
+        self._draw_workspace()
+        session.subscribe(self._on_event)
+        self.redraw()
+
+    # --- static geometry ---------------------------------------------------------------------
+    def _draw_workspace(self) -> None:
+        ws = self._session.workspace
+        (x0, y0, z0), (x1, y1, z1) = ws.min, ws.max
+        w, h = x1 - x0, y1 - y0
+        self._server.scene.add_grid(
+            "/workspace/floor", width=w, height=h, position=((x0 + x1) / 2, (y0 + y1) / 2, z0 - 0.002),
+            cell_size=ws.resolution, section_size=1.0, cell_color=(205, 210, 218), section_color=(140, 150, 165),
+            plane_color=(246, 247, 250), plane_opacity=1.0, shadow_opacity=0.2,
+        )
+        c = np.array([[x0, y0, z0], [x1, y0, z0], [x1, y1, z0], [x0, y1, z0],
+                      [x0, y0, z1], [x1, y0, z1], [x1, y1, z1], [x0, y1, z1]])
+        edges = [(0, 1), (1, 2), (2, 3), (3, 0), (4, 5), (5, 6), (6, 7), (7, 4), (0, 4), (1, 5), (2, 6), (3, 7)]
+        self._server.scene.add_line_segments(
+            "/workspace/bounds", np.array([[c[a], c[b]] for a, b in edges]), (90, 100, 120), thickness=0.012,
+        )
+        self._server.scene.add_label("/workspace/origin", "origin (0, 0)", position=(x0, y0, z0),
+                                     font_screen_scale=0.7, anchor="top-left")
+
+    # --- cells ----------------------------------------------------------------------------------
+    def _on_event(self, topic: str, _payload: Any) -> None:
+        if topic in (GRID, SETTINGS):
+            self.redraw()
+
+    def visible_layers(self) -> dict[str, bool]:
+        """Which cell layers are switched on."""
+        return {name: bool(cb.value) for name, cb in self._checks.items()}
+
+    def redraw(self) -> None:
+        """Redraw the three layers from the session's current grid."""
+        with self._lock:  # read the state inside the lock: the last redraw always draws the latest state
+            grid = self._session.grid
+            ws = grid.workspace
+            max_h = float(self._height.value)
+            counts = grid.counts()
+            goal_cell = ws.cell_of((ws.min[0], ws.min[1], min(self._session.goal_height(), ws.max[2])))
+            level = goal_cell[2] if goal_cell is not None else 0
+            for name, state, rgb, frac, opacity in _LAYERS:
+                node = f"/grid/{name}"
+                old = self._handles.pop(name, None)
+                if not self._checks[name].value:
+                    pts = np.zeros((0, 3))
+                elif state is CellState.FREE:
+                    pts = layer_cells(grid, state, level=level)
+                else:
+                    pts = layer_cells(grid, state, max_h)
+                if len(pts) == 0:
+                    if old is not None:
+                        old.remove()
+                    continue
+                n = len(pts)
+                handle = self._server.scene.add_batched_meshes_simple(
+                    node,
+                    vertices=self._cube.vertices * (ws.resolution * frac),
+                    faces=self._cube.faces,
+                    batched_wxyzs=np.tile([1.0, 0.0, 0.0, 0.0], (n, 1)),
+                    batched_positions=pts.astype(np.float32),
+                    batched_colors=rgb,
+                    opacity=opacity,
+                    lod="off",
+                    cast_shadow=False,
+                    receive_shadow=False,
+                    flat_shading=True,
+                )
+                self._handles[name] = handle
+            self._counts.content = (
+                f"<small>Grid {ws.shape[0]}×{ws.shape[1]}×{ws.shape[2]} at {ws.resolution:g} m: "
+                f"<b style='color:rgb{OCCUPIED_RGB}'>{counts['occupied']}</b> occupied · "
+                f"<b style='color:rgb{(180, 140, 0)}'>{counts['dangerous']}</b> dangerous · "
+                f"<b style='color:rgb{FREE_RGB}'>{counts['free']}</b> free</small>"
+            )
+
+    def drawn_counts(self) -> dict[str, int]:
+        """Instances currently drawn per layer (for tests and the status line)."""
+        with self._lock:
+            return {name: int(len(h.batched_positions)) for name, h in self._handles.items()}

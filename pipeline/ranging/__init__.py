@@ -1,0 +1,3 @@
+"""How far each detected object is: the cues (size prior, ground contact, depth map), their fusion, and placement.
+The mapper uses :class:`pipeline.ranging.ranger.ranger.Ranger`; the cue modules are pure functions.
+"""
