@@ -15,8 +15,9 @@ measured counter-clockwise about the frame's vertical axis from its x axis.
 Reading never trusts the file: :func:`scene_from_dict` checks every field and raises
 :class:`SceneError` naming the first bad one (``objects[2].size[1]: must be > 0, got -1.0``).
 
-This module holds the data classes, the plausibility check and the atomic write; the JSON
-writing / validated reading is :mod:`pipeline.scene_json` (its functions are importable from here).
+This module holds :class:`Scene`, the plausibility check and the atomic write, and re-exports the
+data classes of :mod:`pipeline.scene_model` and the JSON functions of :mod:`pipeline.scene_json`
+(import them from here).
 """
 
 from __future__ import annotations
@@ -25,159 +26,13 @@ import json
 import math
 import os
 import tempfile
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, replace
 from pathlib import Path
-from typing import Any, Literal, Mapping, Sequence
+from typing import Any, Sequence
 
-SCENE_VERSION = 1
-"""Version written into every scene file; files with a newer version are rejected."""
-
-Frame = Literal["camera", "robot", "world"]
-FRAMES: tuple[Frame, ...] = ("camera", "robot", "world")
-
-Vec3 = tuple[float, float, float]
-
-
-class SceneError(ValueError):
-    """A scene file or dict is malformed; ``field`` names the offending field path."""
-
-    def __init__(self, field: str, message: str) -> None:
-        self.field = field
-        super().__init__(f"{field}: {message}" if field else message)
-
-
-@dataclass(frozen=True)
-class Source:
-    """Where an object came from and how its position was estimated.
-
-    Attributes:
-        capture: Id of the capture (photo) the object was mapped from, ``None`` if manual.
-        method: Estimate that produced the position: ``fused`` (size prior + depth),
-            ``geometric`` (size prior only), ``depth`` (depth map only), ``manual``,
-            ``ground_truth`` or ``demo``.
-        bbox: 2D box ``(x1, y1, x2, y2)`` [px] in the capture's image.
-        mask_area: Segmentation mask area [px].
-        distances: Distance estimates along the optical axis [m], keyed ``geometric``,
-            ``depth`` and ``fused``, and ``ground_contact`` (the floor under the box bottom) or
-            ``ground_contact_bound`` (that reading taken only as an upper bound: a nearer object may
-            hide the contact) (``None`` where not available).
-        positions: The object's centre in the other frames, keyed by frame name [m].
-    """
-
-    capture: str | None = None
-    method: str = "manual"
-    bbox: tuple[float, float, float, float] | None = None
-    mask_area: int | None = None
-    distances: Mapping[str, float | None] = field(default_factory=dict)
-    positions: Mapping[str, Vec3] = field(default_factory=dict)
-
-
-@dataclass(frozen=True)
-class Sighting:
-    """One observation of an object by a capture, as the map fusion weighed it (world frame).
-
-    Attributes:
-        capture: Id of the capture that saw it (``None``: the object as it was before fusion kept
-            history, e.g. loaded from a file).
-        position: The observation's box centre [m].
-        yaw: Its heading of the length axis about +z [rad].
-        size: Its ``(w, h, l)`` [m].
-        sigma: 1-sigma errors ``(along the camera ray [m], across it [m], yaw [rad])``.
-        camera: Camera centre at capture [m], ``None`` if unknown (then ``sigma`` is isotropic).
-        distance: Camera-to-object-centre distance [m], ``None`` if unknown.
-        used: Whether it moved the object (``False``: rejected, or the object is pinned).
-        note: Why not used, or what was corrected.
-    """
-
-    capture: str | None
-    position: Vec3
-    yaw: float
-    size: Vec3
-    sigma: Vec3
-    camera: Vec3 | None = None
-    distance: float | None = None
-    used: bool = True
-    note: str = ""
-
-
-@dataclass(frozen=True)
-class SceneObject:
-    """One object: an oriented box with a label.
-
-    Attributes:
-        id: Unique id within the scene.
-        label: Catalog class name (e.g. ``office_chair``).
-        position: Box centre [m] in ``frame``.
-        size: ``(w, h, l)`` full extents [m]; ``h`` vertical.
-        yaw: Heading of the length axis about the frame's vertical axis [rad].
-        frame: Frame of ``position`` and ``yaw``.
-        score: Detector confidence in [0, 1] (1 for manual or ground-truth objects).
-        size_known: Whether ``size`` comes from the catalog (True) or was measured/guessed.
-        source: Provenance of the estimate.
-        pinned: The operator moved, typed or confirmed it: observations never move it (see
-            :attr:`is_pinned`, which also counts ``source.method == "manual"``).
-        history: The observations fused into it, oldest first (see :mod:`pipeline.mapping.map_fusion`).
-        flags: Corrections made by the map fusion, for the operator (``set on the floor: ...``).
-        sigma: The mapper's 1-sigma [m] of the centre along the camera ray (inverse-variance fusion of
-            its distance cues, :mod:`pipeline.ranging.fusion`), ``None`` when not estimated.
-        cut: Sides of the 2D box the image border cuts (``left``, ``top``, ``right``, ``bottom``).
-    """
-
-    id: str
-    label: str
-    position: Vec3
-    size: Vec3
-    yaw: float = 0.0
-    frame: Frame = "world"
-    score: float = 1.0
-    size_known: bool = True
-    source: Source = field(default_factory=Source)
-    pinned: bool = False
-    history: tuple[Sighting, ...] = ()
-    flags: tuple[str, ...] = ()
-    sigma: float | None = None
-    cut: tuple[str, ...] = ()
-
-    @property
-    def is_pinned(self) -> bool:
-        """Placed, moved or confirmed by the operator: the map fusion never moves it."""
-        return self.pinned or self.source.method == "manual"
-
-    def moved(self, position: Vec3, yaw: float | None = None) -> "SceneObject":
-        """A copy at a new position (and optionally heading), marked as manually placed."""
-        return replace(
-            self,
-            position=position,
-            yaw=self.yaw if yaw is None else yaw,
-            source=replace(self.source, method="manual"),
-        )
-
-
-@dataclass(frozen=True)
-class Capture:
-    """One photo the scene was mapped from.
-
-    Attributes:
-        id: Unique id within the scene.
-        timestamp: Capture time [s since the Unix epoch].
-        image: Image file name (relative to the scene file) or ``None``.
-        intrinsics: ``fx, fy, cx, cy`` [px] and ``width, height`` [px].
-        robot_pose: Robot pose at capture in the world frame: ``x, y, z`` [m], ``yaw`` [rad].
-        camera_position: Camera centre in the world frame [m].
-        camera_quaternion: Camera-to-world rotation as quaternion ``(x, y, z, w)``.
-        timings: Per-stage wall time [s] (``detect``, ``segment``, ``depth``, ``total`` ...).
-        models: Names of the models used, keyed by stage.
-    """
-
-    id: str
-    timestamp: float = 0.0
-    image: str | None = None
-    intrinsics: Mapping[str, float] = field(default_factory=dict)
-    robot_pose: Mapping[str, float] = field(default_factory=dict)
-    camera_position: Vec3 | None = None
-    camera_quaternion: tuple[float, float, float, float] | None = None
-    timings: Mapping[str, float] = field(default_factory=dict)
-    models: Mapping[str, str] = field(default_factory=dict)
+from pipeline.scene_json import parse_json_text, scene_parts_from_dict, scene_to_dict
+from pipeline.scene_model import (FRAMES, SCENE_VERSION, Capture, Frame, SceneError, SceneObject, Sighting, Source,
+                                  Vec3)
 
 
 @dataclass(frozen=True)
@@ -206,13 +61,10 @@ class Scene:
         return replace(self, objects=tuple(objects))
 
     def to_dict(self) -> dict[str, Any]:
-        from pipeline.scene_json import scene_to_dict
-
+        """The JSON-ready dict (:func:`pipeline.scene_json.scene_to_dict`)."""
         return scene_to_dict(self)
 
     def to_json(self) -> str:
-        from pipeline.scene_json import scene_to_dict
-
         return json.dumps(scene_to_dict(self), indent=1)
 
     def save(self, path: str | os.PathLike[str]) -> Path:
@@ -229,9 +81,18 @@ class Scene:
             raise SceneError("", f"scene file not found: {p}") from None
         except (OSError, UnicodeDecodeError) as exc:
             raise SceneError("", f"cannot read scene file {p}: {exc}") from None
-        from pipeline.scene_json import scene_from_json
-
         return scene_from_json(text)
+
+
+def scene_from_dict(data: Any) -> Scene:
+    """Validate a parsed scene dict and build the :class:`Scene` (:class:`SceneError` naming the bad field)."""
+    objects, captures = scene_parts_from_dict(data)
+    return Scene(objects=objects, captures=captures, version=SCENE_VERSION)
+
+
+def scene_from_json(text: str) -> Scene:
+    """Parse and validate scene JSON text."""
+    return scene_from_dict(parse_json_text(text))
 
 
 MAX_OBJECT_SIZE = 50.0
@@ -290,14 +151,6 @@ def write_text_atomic(path: Path, text: str) -> Path:
     return path
 
 
-_JSON_NAMES = ("scene_to_dict", "scene_from_dict", "scene_from_json")
-
-
-def __getattr__(name: str) -> Any:
-    """Re-export of the JSON functions of :mod:`pipeline.scene_json` (imported on first use: that
-    module imports this one, so a top-level import here would be circular)."""
-    if name in _JSON_NAMES:
-        from pipeline import scene_json
-
-        return getattr(scene_json, name)
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+__all__ = ["FRAMES", "SCENE_VERSION", "Capture", "Frame", "Scene", "SceneError", "SceneObject", "Sighting", "Source",
+           "Vec3", "check_plausible", "parse_json_text", "scene_from_dict", "scene_from_json", "scene_to_dict",
+           "write_text_atomic"]
