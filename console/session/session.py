@@ -54,7 +54,7 @@ from console.session.session_types import (
     SpawnReport, Vec3, fmt_point,
 )
 from console.session.topics import (
-    CAPTURE, GRID, JOB, MISSION, NOTICE, ROBOT, ROUTE, RUN, SCENE, SELECTION, SETTINGS, Listener,
+    AGENT, CAPTURE, GRID, JOB, MISSION, NOTICE, ROBOT, ROUTE, RUN, SCENE, SELECTION, SETTINGS, Listener,
 )
 
 __all__ = [
@@ -140,6 +140,11 @@ class Session(Persistence, Undo, OperatorRules):
         """Show a message to every connected operator (and log it)."""
         getattr(log, "warning" if level in ("warning", "error") else "info")("%s: %s", title, body)
         self._emit([(NOTICE, Notice(title, body, level))])
+
+    def announce_agent(self, event: dict[str, Any]) -> None:
+        """Tell every listener (the recorder, the agent panel) what a language-model agent did: a tool
+        call, a proposal or the operator's decision (:mod:`console.mcp`); ``event`` is JSON-ready."""
+        self._emit([(AGENT, dict(event))])
 
     # --- read access (snapshots) ---------------------------------------------------------------
     @property

@@ -19,5 +19,6 @@ JOB = "job"  # background job progress [JobStatus]
 SELECTION = "selection"  # selected object changed [str | None]
 SETTINGS = "settings"  # goal mode / altitude / layers changed [None]
 NOTICE = "notice"  # message for every operator [Notice]
+AGENT = "agent"  # a language-model agent's tool call, proposal or the operator's decision (console.mcp) [dict]
 
 Listener = Callable[[str, Any], None]
