@@ -7,6 +7,9 @@ All waypoints are in the world frame (z up) [m]. Walking waypoints sit on the fl
 - ``TAKEOFF``: ``[spot on the floor, spot at the target height]``.
 - ``FLY``: air waypoints, first = the take-off target, last = above the landing spot.
 - ``LAND``: ``[above the spot, spot on the floor]``.
+- ``TURN``: ``[where the robot stands or hovers]`` and ``yaw``, the heading to face [rad]
+  (about world +z, counter-clockwise from world +x, as REP 103): a yaw in place, on the ground or
+  in the air (the camera looks somewhere else; the robot does not move).
 """
 
 from __future__ import annotations
@@ -41,20 +44,35 @@ class SegmentKind(str, Enum):
     TAKEOFF = "takeoff"
     FLY = "fly"
     LAND = "land"
+    TURN = "turn"
 
 
 @dataclass(frozen=True)
 class MissionSegment:
-    """One typed piece of a mission; ``waypoints`` in the world frame [m]."""
+    """One typed piece of a mission; ``waypoints`` in the world frame [m].
+
+    ``yaw`` is the heading a ``TURN`` ends at [rad] (world frame, counter-clockwise from +x,
+    wrapped into [-pi, pi)); ``None`` for every other kind.
+    """
 
     kind: SegmentKind
     waypoints: tuple[Vec3, ...]
+    yaw: float | None = None
 
     def __post_init__(self) -> None:
         if len(self.waypoints) < 1:
             raise MissionError(f"{self.kind.value} segment has no waypoints")
         if self.kind in (SegmentKind.TAKEOFF, SegmentKind.LAND) and len(self.waypoints) != 2:
             raise MissionError(f"{self.kind.value} segment needs exactly 2 waypoints (spot and height)")
+        if self.kind is SegmentKind.TURN:
+            if len(self.waypoints) != 1:
+                raise MissionError("turn segment needs exactly 1 waypoint (where the robot turns)")
+            y = self.yaw
+            if not (isinstance(y, (int, float)) and not isinstance(y, bool) and math.isfinite(y)):
+                raise MissionError(f"turn segment: yaw must be a finite number [rad], got {y!r}")
+            object.__setattr__(self, "yaw", (float(y) + math.pi) % (2 * math.pi) - math.pi)
+        elif self.yaw is not None:
+            raise MissionError(f"{self.kind.value} segment: yaw is only for a turn segment")
 
     @property
     def start(self) -> Vec3:
@@ -81,7 +99,24 @@ class MissionSegment:
         return float(np.linalg.norm(np.diff(p, axis=0), axis=1).sum()) if len(p) > 1 else 0.0
 
     def to_dict(self) -> dict[str, Any]:
-        return {"kind": self.kind.value, "waypoints": [[round(c, 4) for c in w] for w in self.waypoints]}
+        out: dict[str, Any] = {"kind": self.kind.value, "waypoints": [[round(c, 4) for c in w] for w in self.waypoints]}
+        if self.yaw is not None:
+            out["yaw"] = round(self.yaw, 6)
+        return out
+
+
+def turn_segment(at: Vec3, yaw: float) -> MissionSegment:
+    """A ``TURN`` in place at ``at`` (world frame [m]) to the heading ``yaw`` [rad]."""
+    return MissionSegment(SegmentKind.TURN, ((float(at[0]), float(at[1]), float(at[2])),), yaw=yaw)
+
+
+def heading_to(at: Vec3, target: Vec3) -> float:
+    """The heading [rad] (world frame, counter-clockwise from +x) from ``at`` to ``target``
+    (horizontal only); raises :class:`MissionError` when ``target`` is straight above or below."""
+    dx, dy = float(target[0]) - float(at[0]), float(target[1]) - float(at[1])
+    if math.hypot(dx, dy) < 1e-6:
+        raise MissionError(f"({target[0]:.2f}, {target[1]:.2f}) is right at the robot: no heading to face")
+    return math.atan2(dy, dx)
 
 
 @dataclass(frozen=True)
@@ -115,6 +150,8 @@ class Mission:
         for i, s in enumerate(self.segments):
             a, b = s.start, s.end
             extra = f", {len(s.waypoints)} waypoints" if s.kind in (SegmentKind.WALK, SegmentKind.FLY) else ""
+            if s.kind is SegmentKind.TURN and s.yaw is not None:
+                extra = f", to heading {math.degrees(s.yaw):.0f} deg"
             lines.append(
                 f"  {i + 1}. {s.kind.value.upper():8s} ({a[0]:.2f}, {a[1]:.2f}, {a[2]:.2f}) -> "
                 f"({b[0]:.2f}, {b[1]:.2f}, {b[2]:.2f})  {s.length:.2f} m{extra}"
@@ -151,7 +188,8 @@ class Mission:
             try:
                 kind = SegmentKind(s.get("kind"))
             except ValueError:
-                raise MissionError(f"segments[{i}].kind: must be one of walk/takeoff/fly/land, got {s.get('kind')!r}") from None
+                raise MissionError(f"segments[{i}].kind: must be one of {'/'.join(k.value for k in SegmentKind)}, "
+                                   f"got {s.get('kind')!r}") from None
             wps = s.get("waypoints")
             if not isinstance(wps, list):
                 raise MissionError(f"segments[{i}].waypoints: must be a list")
@@ -161,8 +199,14 @@ class Mission:
                         or not all(isinstance(c, (int, float)) and not isinstance(c, bool) and math.isfinite(c) for c in w)):
                     raise MissionError(f"segments[{i}].waypoints[{j}]: must be 3 finite numbers [m], got {w!r}")
                 pts.append((float(w[0]), float(w[1]), float(w[2])))
+            yaw = s.get("yaw")
+            if kind is SegmentKind.TURN and not (isinstance(yaw, (int, float)) and not isinstance(yaw, bool)
+                                                 and math.isfinite(yaw)):
+                raise MissionError(f"segments[{i}].yaw: must be a finite number [rad], got {yaw!r}")
+            if kind is not SegmentKind.TURN and yaw is not None:
+                raise MissionError(f"segments[{i}].yaw: only a turn segment has a yaw")
             try:
-                segs.append(MissionSegment(kind, tuple(pts)))
+                segs.append(MissionSegment(kind, tuple(pts), yaw=None if yaw is None else float(yaw)))
             except MissionError as exc:
                 raise MissionError(f"segments[{i}]: {exc}") from None
         bounds = data.get("bounds") or {}

@@ -366,7 +366,7 @@ class MissionManager(SafetyMixin):
         if pausing:  # the pause came between two segments
             self._emit("info", f"mission paused before segment {index + 1}/{n}", status=MissionStatus.PAUSED)
             return "paused"
-        ctl = _control(part.kind)
+        ctl = self._progress.control if part.kind is SegmentKind.TURN else _control(part.kind)  # a turn keeps it
         if ctl != self._progress.control:
             self._emit("info", f"switching to {ctl} control", control=ctl)
         what = f"segment {index + 1}/{n}: {kind_text(part.kind)}" + ("" if is_main else " (recovery)")

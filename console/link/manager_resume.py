@@ -68,6 +68,10 @@ def segment_parts(seg: MissionSegment, st: RobotState, floor: float, next_wp: in
             out.append((MissionSegment(k, ((here[0], here[1], floor), (here[0], here[1], top[2]))), True))
         else:
             out.append((MissionSegment(SegmentKind.FLY, (tuple(here), top)), True))
+    elif k is SegmentKind.TURN:  # yaw in place wherever the robot is now (ground or air)
+        if fresh and math.dist(here[:2], wps[0][:2]) > tolerance:
+            raise LinkError(f"the robot is {math.dist(here[:2], wps[0][:2]):.2f} m from where it should turn")
+        out.append((MissionSegment(k, (tuple(map(float, here)),), yaw=seg.yaw), True))
     else:  # LAND
         above, spot = wps
         if st.landed:

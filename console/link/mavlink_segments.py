@@ -7,10 +7,13 @@ speed, landed state, readiness):
 
 - walking: ground-motion targets (:class:`~console.link.mavlink_config.GroundMotion`) to each waypoint;
 - take-off: wait (bounded) until the vehicle is ready, GUIDED, arm, ``MAV_CMD_NAV_TAKEOFF``, climb;
-- flight: the configured speeds (``MAV_CMD_DO_CHANGE_SPEED``), then ``SET_POSITION_TARGET_LOCAL_NED``
-  re-sent at the set-point rate until within tolerance;
+- flight: ``SET_POSITION_TARGET_LOCAL_NED`` re-sent at the set-point rate until within tolerance; the
+  speeds (``MAV_CMD_DO_CHANGE_SPEED``) go out once position control has started and again after every
+  controller change, and the measured speed is watched (:mod:`~console.link.mavlink_speed`);
 - landing: above the spot, *stopped* there (``STILL_DWELL`` of still samples), then LAND until
-  ``EXTENDED_SYS_STATE`` says on ground.
+  ``EXTENDED_SYS_STATE`` says on ground;
+- turn: yaw in place, the position target at where the vehicle is with the turn's yaw (ground or
+  air), until ``ATTITUDE`` says the heading is within ``YAW_TOLERANCE``.
 
 Nothing is sent or decided from an invalid or stale position: the execution waits (the mission
 manager's failsafe decides). Positions are world frame (z up) [m], speeds [m/s], times [s].
@@ -29,8 +32,10 @@ import numpy as np
 from planner.mission import SegmentKind
 
 from console.link.base import LinkError, LinkTimeout, RunStatus, SegmentRun
-from console.link.mavlink_commands import SPEED_CLIMB, SPEED_DESCENT, SPEED_GROUND, Commander, Stopped
+from console.link.mavlink_commands import Commander, Stopped
 from console.link.mavlink_config import MavlinkConfig
+from console.link.mavlink_authority import VehicleInControl
+from console.link.mavlink_speed import SpeedGuard
 from console.link.mavlink_state import landed
 from console.link.mavlink_telemetry import LANDED_IN_AIR, LANDED_TAKEOFF, Telemetry
 
@@ -38,6 +43,13 @@ log = logging.getLogger(__name__)
 
 STILL_DWELL = 0.3
 """How long [s] the vehicle must stay still over a spot before a landing starts there."""
+
+YAW_TOLERANCE = math.radians(5.0)
+"""How close [rad] the vehicle's heading (ATTITUDE yaw) must come to a turn's heading."""
+
+TURN_RATE_EXPECTED = math.radians(30.0)
+"""The slowest yaw rate [rad/s] a turn's time-out allows for (ArduCopter's ATC_RATE_Y_MAX is
+higher; ground robots may be slower)."""
 
 
 class SegmentExecutor:
@@ -53,6 +65,7 @@ class SegmentExecutor:
         self.config = config
         self.telemetry = telemetry
         self.commander = commander
+        self.speed_guard = SpeedGuard(config, telemetry, commander)
 
     def airborne(self) -> bool:
         """Whether the vehicle is in the air (from its landed state and height)."""
@@ -64,7 +77,7 @@ class SegmentExecutor:
         FAILED with the reason; a ``cancel`` (hold / abort) leaves finishing it to the caller."""
         try:
             {SegmentKind.WALK: self._do_walk, SegmentKind.TAKEOFF: self._do_takeoff, SegmentKind.FLY: self._do_fly,
-             SegmentKind.LAND: self._do_land}[run.segment.kind](run, cancel)
+             SegmentKind.LAND: self._do_land, SegmentKind.TURN: self._do_turn}[run.segment.kind](run, cancel)
             run.finish(RunStatus.DONE)
         except Stopped:
             pass  # hold()/abort() finishes the run
@@ -117,6 +130,10 @@ class SegmentExecutor:
         while True:
             if cancel.is_set():
                 raise Stopped()
+            with self.telemetry.lock:
+                taken = self.telemetry.authority.describe()
+            if taken:  # the vehicle chose another mode: nothing more is sent or decided here
+                raise VehicleInControl(taken)
             here = self.pos()
             if here is not None:
                 if each is not None:
@@ -128,14 +145,10 @@ class SegmentExecutor:
             cancel.wait(period)
 
     def _speeds(self, ground: bool, cancel: threading.Event) -> None:
-        """Command the configured speeds (MAV_CMD_DO_CHANGE_SPEED) for what comes next."""
-        cfg = self.config
-        if ground:
-            self.commander.change_speed(SPEED_GROUND, cfg.ground.speed, cancel, cfg.ground.target_component)
-            return
-        self.commander.change_speed(SPEED_GROUND, cfg.fly_speed, cancel)
-        self.commander.change_speed(SPEED_CLIMB, cfg.climb_rate, cancel)
-        self.commander.change_speed(SPEED_DESCENT, cfg.descent_rate, cancel)
+        """Velocity targets carry their speed (sent here too); position targets get theirs once position
+        control has started (:meth:`SpeedGuard.before_target`: ArduCopter resets the speed then)."""
+        if ground and self.config.ground.command == "velocity":
+            self.speed_guard.send_speeds(True, cancel)
 
     def _go_to(self, run: SegmentRun, cancel: threading.Event, target: np.ndarray, index: int, ground: bool,
                progress: Callable[[float], float], stop: bool = False) -> None:
@@ -161,7 +174,9 @@ class SegmentExecutor:
                 v = d / n * min(cfg.ground.speed, n * cfg.setpoint_rate) if n > 1e-6 else np.zeros(3)
                 self.commander.send_velocity_target((float(v[0]), float(v[1]), 0.0), yaw, comp)
             else:
+                self.speed_guard.before_target(here, ground, yaw, comp, cancel)
                 self.commander.send_position_target((float(target[0]), float(target[1]), float(target[2])), yaw, comp)
+                self.speed_guard.watch(ground, cancel)
             run.update(progress(max(0.0, dist0 - remaining(here))), index)
 
         still_since: list[float] = []  # when the vehicle was first seen there and still (stop only)
@@ -290,6 +305,47 @@ class SegmentExecutor:
         self._go_to(run, cancel, np.array([above[0], above[1], z]), 0, False, lambda d: 0.2, stop=True)
         self.land(run, cancel)
 
+    def _do_turn(self, run: SegmentRun, cancel: threading.Event) -> None:
+        """Yaw in place to the segment's heading (world frame [rad]).
+
+        ArduCopter in GUIDED takes the yaw of SET_POSITION_TARGET_LOCAL_NED unless the type mask's
+        YAW_IGNORE bit is set (GCS_Mavlink.cpp, handle_message_set_position_target_local_ned ->
+        ModeGuided::set_destination with use_yaw); the target is where the vehicle is when the turn
+        starts, so it holds its place (on the ground: the ground-motion command set, at floor
+        height). Done when ATTITUDE's yaw is within :data:`YAW_TOLERANCE`.
+        """
+        cfg, g = self.config, self.config.ground
+        yaw = float(run.segment.yaw if run.segment.yaw is not None else 0.0)
+        ground = not self.airborne()
+        if ground:
+            if g.mode is not None:
+                self.commander.set_mode(g.mode, cancel)
+            if g.arm and not self.commander.armed():
+                self.commander.arm(cancel)
+        else:
+            self.commander.set_mode(cfg.flight_mode, cancel)
+        hold = self.position(cancel)
+        if ground:
+            hold[2] = float(cfg.floor)
+        comp = g.target_component if ground else None
+
+        def error() -> float:
+            with self.telemetry.lock:
+                now = cfg.ned.yaw_to_world(self.telemetry.v.yaw_ned)
+            return abs((yaw - now + math.pi) % (2 * math.pi) - math.pi)
+
+        err0 = max(error(), 1e-6)
+
+        def send(here: np.ndarray) -> None:
+            if ground and g.command == "velocity":
+                self.commander.send_velocity_target((0.0, 0.0, 0.0), yaw, comp)
+            else:
+                self.commander.send_position_target((float(hold[0]), float(hold[1]), float(hold[2])), yaw, comp)
+            run.update(max(0.0, 1.0 - error() / err0), 0)
+
+        self._wait(lambda here: error() <= YAW_TOLERANCE,
+                   self._motion_timeout(err0, TURN_RATE_EXPECTED), f"heading {math.degrees(yaw):.0f} deg", cancel, send)
+
     def land(self, run: SegmentRun, cancel: threading.Event) -> None:
         cfg = self.config
         self.commander.set_mode(cfg.land_mode, cancel)
@@ -304,4 +360,4 @@ class SegmentExecutor:
                    cancel)
 
 
-__all__ = ["SegmentExecutor", "STILL_DWELL"]
+__all__ = ["SegmentExecutor", "STILL_DWELL", "YAW_TOLERANCE"]

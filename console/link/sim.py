@@ -3,9 +3,11 @@
 The robot lives in a hidden ground-truth world (default: the paper's room, see
 :mod:`console.link.world`) that the operator only learns about by mapping its photos. It walks,
 takes off, flies and lands at configurable speeds and rates, in simulated time that can run
-faster than the wall clock (``time_scale``). It never moves into a cell that an object of the
-hidden world occupies, nor out of the workspace (the safety net): such a move stops the robot
-and fails the segment with a message naming the object. Its camera renders the hidden world from
+faster than the wall clock (``time_scale``). It rehearses like a real robot: a segment is never
+refused up front because of a hidden object; the robot moves until its body would touch one
+(:mod:`~console.link.sim_contact`) and stops there, failing the segment with "contact with an
+unmapped obstacle ahead at (x, y, z)" (never the object's name, class or extent). It never leaves
+the workspace (the safety net; checked up front). Its camera renders the hidden world from
 the robot's camera pose (RGB + ground-truth depth and instance masks), or serves real photos from
 a ``--captures`` folder.
 
@@ -32,7 +34,6 @@ import numpy as np
 
 from pipeline.camera.geometry import CameraMount, Intrinsics, Pose, camera_pose_in_world
 from pipeline.scene import Scene
-from planner.grid import CellState, PlanningGrid, build_grid
 from planner.mission import MissionSegment
 
 from console.link.base import CaptureResult, LinkError, Mode, RobotLink, RobotState, RunStatus, SegmentRun
@@ -40,6 +41,7 @@ from console.link.captures import CapturesFolder
 from console.link.render import SceneRenderer
 from console.link.sim_camera import folder_capture, render_capture
 from console.link.sim_config import DEFAULT_INTRINSICS, DEFAULT_MOUNT, SimConfig
+from console.link.sim_contact import BodyContact, contact_text
 from console.link.sim_motion import Phase, path_length, plan_segment, verb, wrap_angle
 from console.link.world import DEFAULT_START, ROOM_MAX, ROOM_MIN, paper_room
 
@@ -80,7 +82,7 @@ class SimRobot(RobotLink):
         # a folder of photos, or any photo source with next() -> FolderPhoto (a live camera)
         self.captures = (captures if captures is None or hasattr(captures, "next")
                          else CapturesFolder(captures))
-        self._truth: PlanningGrid = build_grid(self.world, config.workspace, margin=0.0)
+        self._contact = BodyContact(self.world.objects, config.body_radius, config.body_height)
         x, y, z = (float(v) for v in start.translation)
         self._pos = np.array([x, y, max(z, config.workspace.floor)])
         self._yaw = start.yaw
@@ -116,7 +118,7 @@ class SimRobot(RobotLink):
     @property
     def description(self) -> str:
         cam = f"photos from {self.captures.folder}" if self.captures else "rendered camera"
-        return f"simulated robot ({len(self.world.objects)} hidden objects, {cam})"
+        return f"simulated robot (hidden world, {cam})"
 
     @property
     def connected(self) -> bool:
@@ -295,21 +297,17 @@ class SimRobot(RobotLink):
 
     # --- motion ----------------------------------------------------------------------------------
     def _blocker(self, p: np.ndarray) -> str | None:
-        """Why the point ``p`` is not allowed, or ``None``."""
-        ws = self.config.workspace
-        cell = ws.cell_of(p)
-        if cell is None:
+        """Why the point ``p`` is not allowed (outside the workspace: the safety net), or ``None``.
+        Hidden objects are not checked here: the robot finds them by touching them."""
+        if self.config.workspace.cell_of(p) is None:
             return f"({p[0]:.2f}, {p[1]:.2f}, {p[2]:.2f}) is outside the workspace (the safety net)"
-        if self._truth.state[cell] == CellState.OCCUPIED:
-            oid = self._truth.owner_of(cell)
-            label = ""
-            if oid is not None:
-                label = f"{self.world.object(oid).label} '{oid}'"
-            return f"{label or 'an obstacle'} occupies ({p[0]:.2f}, {p[1]:.2f}, {p[2]:.2f})"
         return None
 
     def _check_free(self, p: np.ndarray, what: str) -> None:
         why = self._blocker(p)
+        if why is None and self._contact.touches(p):
+            why = (f"the robot's body ({self.config.body_radius:.2f} m radius) at ({p[0]:.2f}, {p[1]:.2f}, "
+                   f"{p[2]:.2f}) touches an object of the world")
         if why is not None:
             raise LinkError(f"{what} is not free: {why}")
 
@@ -350,6 +348,9 @@ class SimRobot(RobotLink):
                 if p[2] > self._floor + 1e-6:
                     self._landed = False
                 why = self._blocker(p)
+                touch = self._contact.blocked(self._pos, p) if why is None else None
+                if touch is not None:
+                    why = contact_text(touch)
                 if why is not None:
                     self._fail(f"{verb(ph)} stopped: {why}")
                     return 0.0

@@ -45,6 +45,12 @@ class SimConfig:
             segment and lands where it is by itself (mode ``failsafe``, status message "battery
             critical: landing"); 0 disables it. Tests reach it quickly with a high ``drain_*`` rate or
             :meth:`~console.link.sim.SimRobot.set_battery`.
+        body_radius: The robot's body in plan: a circle of this radius [m] around its origin. A
+            motion stops where the body would touch a hidden object ("contact with an unmapped
+            obstacle ahead at (x, y, z)"). Smaller than the planner's robot radius (0.35 m), which
+            adds a safety margin to the body.
+        body_height: The body's height above its origin [m] (the origin is on the floor when the
+            robot walks; the camera sits 0.35 m up).
     """
 
     walk_speed: float = 0.4
@@ -64,10 +70,12 @@ class SimConfig:
     link_loss_hold: float = 1.0
     link_loss_land: float = 10.0
     battery_critical: float = 0.10
+    body_radius: float = 0.25
+    body_height: float = 0.45
 
     def __post_init__(self) -> None:
         for name in ("walk_speed", "fly_speed", "climb_rate", "descent_rate", "yaw_rate", "time_scale",
-                     "start_tolerance"):
+                     "start_tolerance", "body_radius", "body_height"):
             v = getattr(self, name)
             if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
                 raise ValueError(f"SimConfig.{name} must be a positive number, got {v!r}")

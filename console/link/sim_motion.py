@@ -1,9 +1,10 @@
 """The simulated robot's motion plan: a mission segment turned into timed phases.
 
 A segment becomes a list of :class:`Phase` (turn to face the way, move, spool the motors up,
-climb, descend, settle) that :class:`~console.link.sim.SimRobot` runs in simulated time. The
-plan checks that the segment starts where the robot is, that no waypoint is blocked and that the
-segment fits the robot's state (no walking in the air, no flying on the ground).
+climb, descend, settle; a ``TURN`` segment is one turn in place) that :class:`~console.link.sim.SimRobot` runs in simulated time. The
+plan checks that the segment starts where the robot is, that no waypoint leaves the workspace and
+that the segment fits the robot's state (no walking in the air, no flying on the ground). Hidden
+objects are not checked up front: the robot finds them by touching them while it moves.
 
 Frames: world (z up) [m]; yaw about +z [rad].
 """
@@ -80,7 +81,7 @@ def plan_segment(seg: MissionSegment, here: np.ndarray, yaw: float, landed: bool
         landed: Whether the robot is on the ground.
         floor: Ground height [m].
         cfg: Speeds, rates and the start tolerance.
-        blocker: Why a point is not allowed (occupied, outside the workspace), or ``None``.
+        blocker: Why a point is not allowed (outside the workspace), or ``None``.
 
     Returns:
         The phases in order (empty: nothing to do, e.g. a landing on the ground).
@@ -139,6 +140,10 @@ def plan_segment(seg: MissionSegment, here: np.ndarray, yaw: float, landed: bool
                           speed=cfg.climb_rate, waypoint=1))
         if float(np.hypot(*(top - here)[:2])) > 1e-6:
             phases.append(Phase("move", Mode.TAKING_OFF, target=tuple(top), speed=cfg.fly_speed, waypoint=1))
+    elif kind is SegmentKind.TURN:  # yaw in place, on the ground or hovering
+        assert seg.yaw is not None
+        if abs(wrap_angle(seg.yaw - yaw)) > 1e-3:
+            phases.append(Phase("turn", Mode.WALKING if landed else Mode.FLYING, yaw=seg.yaw, waypoint=0))
     elif kind is SegmentKind.LAND:
         above, spot = wps
         if float(np.linalg.norm(above - here)) > 1e-6:

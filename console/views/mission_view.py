@@ -8,6 +8,7 @@ into calls and draws the reported status.
 from __future__ import annotations
 
 import html
+import math
 import threading
 from typing import Any, Protocol
 
@@ -65,6 +66,8 @@ def segment_table(mission: Mission, current: int | None = None) -> str:
                 f"background:rgb{KIND_RGB[s.kind]};margin-right:0.3em'></span>")
         kind = kind_text(s.kind)
         peak = f", **max {max_height(s, floor):.1f} m**" if s.kind is SegmentKind.FLY else ""
+        if s.kind is SegmentKind.TURN and s.yaw is not None:
+            peak = f", to heading **{math.degrees(s.yaw):.0f}°**"
         row = (f"| {i + 1} | {chip}{kind} | ({a[0]:.1f}, {a[1]:.1f}, {a[2]:.1f}) → "
                f"({b[0]:.1f}, {b[1]:.1f}, {b[2]:.1f}){peak} | {s.length:.2f} m |")
         if current == i:

@@ -38,6 +38,7 @@ KIND_RGB: dict[SegmentKind, tuple[int, int, int]] = {
     SegmentKind.TAKEOFF: (255, 140, 0),
     SegmentKind.FLY: (142, 68, 173),
     SegmentKind.LAND: (233, 30, 99),
+    SegmentKind.TURN: (30, 136, 229),
 }
 LIFT = 0.025  # draw floor paths this far above the floor [m], clear of the floor grid
 NODE_CLICK_WINDOW = 0.5  # a scene click this soon after an object click belongs to the object [s]

@@ -167,7 +167,8 @@ def test_a_blocked_path_pauses_the_mission_with_the_reason(robot: SimRobot) -> N
     manager.start(through)
     assert manager.wait(30.0) is MissionStatus.PAUSED
     p = manager.progress()
-    assert "walking stopped" in p.message and "cardboard_box" in p.message and "paused" in p.message
+    assert "walking stopped: contact with an unmapped obstacle ahead at (" in p.message and "paused" in p.message
+    assert "cardboard_box" not in p.message
     assert p.segment == 0 and p.mission_id == through.id and 0.2 < p.fraction < 0.8
     manager.abort()
     assert manager.wait(30.0) is MissionStatus.ABORTED

@@ -82,22 +82,28 @@ def test_the_robot_turns_to_face_where_it_walks() -> None:
     assert robot.latest_state().yaw == pytest.approx(0.0, abs=1e-6)
 
 
-def test_walking_into_an_occupied_cell_is_refused() -> None:
+def test_walking_into_a_hidden_object_stops_at_contact_without_naming_it() -> None:
     robot = _manual()
     robot.run_segment(MissionSegment(WALK, ((2.5, 0.7, 0.0), (2.55, 3.2, 0.0))))
     robot.run_for(10.0)
     run = robot.run_segment(MissionSegment(WALK, ((2.55, 3.2, 0.0), (2.55, 5.5, 0.0))))  # through the boxes
     _run_until_done(robot, run)
     assert run.status is RunStatus.FAILED
-    assert "cardboard_box" in run.error and "walking stopped" in run.error
+    assert "walking stopped: contact with an unmapped obstacle ahead at (" in run.error
+    assert "cardboard_box" not in run.error and "box-" not in run.error  # the hidden world is not named
     y = robot.latest_state().position[1]
-    assert 3.5 < y < BOX_LINE_Y - BOX_SIZE[0] / 2  # stopped in front of the line
-    # a target inside an object is refused before moving
+    face = BOX_LINE_Y - BOX_SIZE[2] / 2  # the near face of the line
+    radius = robot.config.body_radius
+    assert face - radius - 0.06 <= y < face - radius  # stopped where its body touches, not before
+    # a target inside an object is not refused up front: the robot moves until it touches
     run = robot.run_segment(MissionSegment(WALK, ((2.55, y, 0.0), (2.5, BOX_LINE_Y, 0.0))))
-    assert run.status is RunStatus.FAILED and "occupies" in run.error
+    assert not run.done
+    _run_until_done(robot, run)
+    assert run.status is RunStatus.FAILED and "contact with an unmapped obstacle ahead" in run.error
     robot.run_for(0.1)
     said = [t for _, t in robot.latest_state().messages]  # the robot tells the operator, as an autopilot would
-    assert said[-2].startswith("ERROR: ") and "walking stopped" in said[-2] and "occupies" in said[-1]
+    assert said[-1].startswith("ERROR: ") and "contact with an unmapped obstacle ahead" in said[-1]
+    assert not any("box" in t or "occupies" in t for t in said)
 
 
 def test_takeoff_flight_and_landing_take_time_and_report_modes() -> None:

@@ -30,7 +30,7 @@ from planner.mission import MissionSegment, SegmentKind
 from planner.route import Route
 
 FAST = dict(walk_speed=1.0, fly_speed=1.5, climb_rate=1.0, descent_rate=1.0, spool_time=0.3, settle_time=0.2)
-BLOCKER = re.compile(r"occupies \(([-\d.]+), ([-\d.]+), ([-\d.]+)\)")
+BLOCKER = re.compile(r"contact with an unmapped obstacle ahead at \(([-\d.]+), ([-\d.]+), ([-\d.]+)\)")
 MAX_ROUNDS = 10
 MARGIN = float(__import__("os").environ.get("LOOP_MARGIN", "0.5"))
 
