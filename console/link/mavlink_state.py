@@ -68,7 +68,8 @@ def make_state(tel: Telemetry, cfg: MavlinkConfig, running: SegmentKind | None,
     still = fresh and math.sqrt(sum(c * c for c in vel)) < cfg.still_speed
     landing_started = landed_state == LANDED_LANDING or mode_name == cfg.land_mode
     if running is not None and (running is not SegmentKind.LAND or landing_started or on_ground):
-        mode = _MOVING[running]  # a LAND run is "landing" once the vehicle lands
+        # a LAND run is "landing" once the vehicle lands; a TURN is ground or flight motion where it is
+        mode = _MOVING.get(running) or (Mode.WALKING if on_ground else Mode.FLYING)
     elif status >= 5:  # MAV_STATE_CRITICAL / EMERGENCY: the autopilot's failsafe acts
         mode = Mode.FAILSAFE
     elif landed_state == LANDED_TAKEOFF:
