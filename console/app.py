@@ -95,6 +95,12 @@ class ConsoleConfig:
         record: Record the session as MCAP in ``<session>/recordings`` (:mod:`console.recording.recording`).
         foxglove_port: Also serve the recorded topics live over the Foxglove WebSocket protocol on
             127.0.0.1 at this port (0 = any free port), or ``None`` (off).
+        mcp_port: Also serve the MCP server for language-model agents (:mod:`console.mcp`) over
+            streamable HTTP on 127.0.0.1 at this port (0 = any free port), or ``None`` (off).
+        mcp_allow_actions: That server offers the proposal tools (each needs the operator's Approve).
+        agent_real_vehicle: Allow agent proposals on a real (non-loopback) vehicle link.
+        world: The simulator's world (:class:`~console.link.world_file.World` or a world file's path;
+            ``None``: the paper's room): its hidden objects, bounds (the workspace), walls and start.
     """
 
     robot: str = "sim"
@@ -112,6 +118,10 @@ class ConsoleConfig:
     link_options: Mapping[str, Any] = field(default_factory=dict)
     record: bool = True
     foxglove_port: int | None = None
+    mcp_port: int | None = None
+    mcp_allow_actions: bool = False
+    agent_real_vehicle: bool = False
+    world: Any = None
 
 
 class ConsoleApp:
@@ -130,6 +140,7 @@ class ConsoleApp:
         self.server: viser.ViserServer | None = None
         self.session: Session | None = None
         self.link: Any = None
+        self.world: Any = None  # the simulator's World (console.link.world_file), set by start()
         self.mapping: MappingJob | None = None
         self.preload: ModelPreload | None = None
         self.runner: MissionRunner | None = None
@@ -152,11 +163,15 @@ class ConsoleApp:
         if not is_loopback(cfg.host):
             log.warning("listening on %s: anyone who can reach this address and port can see the map and "
                         "DRIVE THE ROBOT; there is no login. Use the default 127.0.0.1 unless you must.", cfg.host)
-        from console.link.world import DEFAULT_START
+        from console.link.world_file import World, load_world, paper_world
 
-        self.link = self._link_override if self._link_override is not None else self._open_link(cfg.robot, cfg.captures, cfg.link_options)
-        start = DEFAULT_START.translation
-        ws = Workspace(resolution=cfg.resolution)
+        world = (cfg.world if isinstance(cfg.world, World) else load_world(cfg.world) if cfg.world is not None
+                 else paper_world())  # --world FILE: the simulator's hidden room, bounds and start
+        self.world = world
+        options = {**world.link_options(cfg.resolution), **cfg.link_options} if cfg.robot == "sim" else cfg.link_options
+        self.link = self._link_override if self._link_override is not None else self._open_link(cfg.robot, cfg.captures, options)
+        start = world.start.translation
+        ws = world.workspace(cfg.resolution)
         self.session = session = Session(cfg.session_dir, start=start, workspace=ws, margin=cfg.margin)
         restored: list[str] | None = None
         if not cfg.fresh:  # a bad file is kept aside by the session; SessionError (what to do) if it cannot be
@@ -184,6 +199,9 @@ class ConsoleApp:
         self.watcher = SceneWatcher(scene_dir, self._spawn_file, self._bad_file, spawn_existing=restored is None)
         self.watcher.start()
         self._closers.append(self.watcher.stop)
+        from console.mcp.attach import attach_agent  # the Agent panel, `morphonavi mcp`'s door, `--mcp`
+
+        attach_agent(self)
         log.info("MorphoNavi console at %s (robot: %s, session: %s, watched scenes: %s)",
                  self.url, cfg.robot, session.folder, self.watcher.folder)
         if restored:
@@ -322,8 +340,8 @@ class ConsoleApp:
         gui.add_html(page_style(RIGHT_PANEL_PX))  # notifications bottom right; the "disconnected" banner
         from console.session.vehicle_commands import VehicleCommands
 
-        self.views["robot"] = RobotView(server, session, self.config.robot,
-                                        commands=VehicleCommands(session, self.link, self.runner))
+        self.commands = VehicleCommands(session, self.link, self.runner)  # also the agent's Hold / Land here / Return
+        self.views["robot"] = RobotView(server, session, self.config.robot, commands=self.commands)
         # the mission and its run controls right under the robot status: both stay in sight at 1440 x 900
         with gui.add_folder("Mission"):
             self.views["mission"] = MissionView(server, session, self.runner)

@@ -124,6 +124,9 @@ def add_console_parser(subparsers: argparse._SubParsersAction) -> argparse.Argum
     p.add_argument("--robot", default="sim", metavar="SPEC",
                    help="robot link: 'sim' (default, the built-in simulated robot) or "
                         "'mavlink:<connection>', e.g. mavlink:udpin:127.0.0.1:14550")
+    p.add_argument("--world", type=Path, default=None, metavar="FILE",
+                   help="the simulator's hidden room: a world file (scene, bounds, room, robot start; see "
+                        "docs/howto/simulator.md and examples/worlds/); default the paper's room")
     p.add_argument("--scene", type=Path, default=None, metavar="DIR",
                    help=f"watched scene folder: scene JSON files dropped there are added to the map "
                         f"(default {DEFAULT_SCENES})")
@@ -137,6 +140,15 @@ def add_console_parser(subparsers: argparse._SubParsersAction) -> argparse.Argum
     p.add_argument("--foxglove-ws", dest="foxglove_port", type=_port, default=None, metavar="PORT",
                    help="also serve the recorded topics live to the Foxglove app (Foxglove WebSocket protocol) on "
                         "127.0.0.1:PORT; off by default")
+    agent = p.add_argument_group("language-model agents (MCP; see docs/howto/mcp.md)")
+    agent.add_argument("--mcp", dest="mcp_port", type=_port, default=None, metavar="PORT",
+                       help="also serve the MCP server (streamable HTTP) on 127.0.0.1:PORT/mcp; `morphonavi mcp` "
+                            "attaches to any running console without it")
+    agent.add_argument("--mcp-allow-actions", action="store_true",
+                       help="that server offers the proposal tools (plan, propose a mission, capture); each needs "
+                            "the operator's Approve in the console")
+    agent.add_argument("--agent-real-vehicle", action="store_true",
+                       help="allow agent proposals on a real (non-loopback) vehicle link; off by default")
     p.add_argument("--host", default="127.0.0.1",
                    help="interface to listen on (default 127.0.0.1: this machine only). Anything else lets "
                         "whoever reaches the port drive the robot: there is no login")
@@ -189,6 +201,23 @@ def cmd_console(args: argparse.Namespace) -> int:
         logging.getLogger(noisy).setLevel(logging.WARNING)
     if args.foxglove_port is not None and not args.record:
         raise CliError("--foxglove-ws serves what is recorded: drop --no-record")
+    if args.mcp_allow_actions and args.mcp_port is None:
+        raise CliError("--mcp-allow-actions is for the server --mcp PORT starts (morphonavi mcp has its own "
+                       "--allow-actions)")
+    if args.mcp_port is not None:
+        from console.cli.mcp_cmd import need_mcp
+
+        need_mcp("--mcp")
+    world = None
+    if args.world is not None:
+        if str(args.robot).startswith("mavlink:"):
+            raise CliError("--world is the simulator's room: drop it with --robot mavlink:... (a real robot is in its own room)")
+        from console.link.world_file import WorldError, load_world
+
+        try:
+            world = load_world(args.world)
+        except WorldError as exc:
+            raise CliError(f"--world {exc}") from None
     if args.captures is not None and not Path(args.captures).is_dir():
         raise CliError(f"--captures {args.captures}: no such folder")
     if args.models is not None and not Path(args.models).is_dir():
@@ -202,7 +231,8 @@ def cmd_console(args: argparse.Namespace) -> int:
         session_dir=args.session, host=args.host, port=args.port, models=args.models, fresh=args.fresh,
         resolution=args.resolution, margin=args.margin, captures=photo_source(args),
         failsafe_after=args.failsafe_after, failsafe_hold=args.failsafe_hold, link_options=link_options(args),
-        record=args.record, foxglove_port=args.foxglove_port,
+        record=args.record, foxglove_port=args.foxglove_port, mcp_port=args.mcp_port, world=world,
+        mcp_allow_actions=args.mcp_allow_actions, agent_real_vehicle=args.agent_real_vehicle,
     )
     try:
         lock = SessionLock(args.session).acquire()
@@ -221,7 +251,9 @@ def cmd_console(args: argparse.Namespace) -> int:
             if isinstance(exc, (LinkError, OSError, ValueError)):
                 raise CliError(f"cannot start the console: {exc}") from None
             raise
-        app.serve_forever(ready=lambda: print(f"MorphoNavi console: open {app.url} in a browser (Ctrl-C to stop)",
+        host = getattr(app, "mcp_host", None)
+        app.serve_forever(ready=lambda: print(f"MorphoNavi console: open {app.url} in a browser (Ctrl-C to stop)"
+                                              + (f"\nMCP server for agents: {host.url}" if host is not None else ""),
                                               flush=True))
     finally:
         lock.release()
