@@ -42,6 +42,7 @@ SCENE_JSON = "/morphonavi/scene"
 ROUTE_JSON = "/morphonavi/route"
 MISSION_JSON = "/morphonavi/mission"
 SESSION_INFO = "/morphonavi/session"
+AGENT_EVENTS = "/agent/events"  # a language-model agent's tool calls, proposals, the operator's decisions
 
 FOXGLOVE_TYPES: dict[str, Any] = {
     POSE: fm.PoseInFrame, TF: fm.FrameTransform, IMAGE: fm.CompressedImage, CALIBRATION: fm.CameraCalibration,
@@ -50,7 +51,7 @@ FOXGLOVE_TYPES: dict[str, Any] = {
 JSON_TOPICS: dict[str, str] = {
     ROBOT_STATE: "morphonavi.RobotState", CAPTURE_META: "morphonavi.Capture", PROGRESS: "morphonavi.MissionProgress",
     SCENE_JSON: "morphonavi.Scene", ROUTE_JSON: "morphonavi.Route", MISSION_JSON: "morphonavi.Mission",
-    SESSION_INFO: "morphonavi.Session",
+    SESSION_INFO: "morphonavi.Session", AGENT_EVENTS: "morphonavi.AgentEvent",
 }
 
 OCCUPIED_RGBA = (0.86, 0.2, 0.18, 0.6)
