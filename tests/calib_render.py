@@ -68,14 +68,15 @@ class Renderer:
             return np.array([(b.cols - 1) / 2 * b.square, (b.rows - 1) / 2 * b.square, 0.0])
         return np.array([b.cols / 2 * b.square, b.rows / 2 * b.square, 0.0])
 
-    def views(self, n: int, seed: int = 0, tilt_deg: float = 35.0, distance: tuple[float, float] = (0.38, 0.55)
-              ) -> list[tuple[str, np.ndarray]]:
-        """``n`` photos from random tilts (up to ``tilt_deg``) and distances [m], board near the centre."""
+    def views(self, n: int, seed: int = 0, tilt_deg: float = 35.0, distance: tuple[float, float] = (0.38, 0.55),
+              shift: tuple[float, float] = (0.04, 0.03)) -> list[tuple[str, np.ndarray]]:
+        """``n`` photos from random tilts (up to ``tilt_deg``) and distances [m], the board's centre up to
+        ``shift`` (x, y) [m] off the optical axis (the default keeps it near the image centre)."""
         rng = np.random.default_rng(seed)
         out = []
         for i in range(n):
             rot = Rotation.from_euler("xyz", np.radians([rng.uniform(-tilt_deg, tilt_deg),
                                                          rng.uniform(-tilt_deg, tilt_deg), rng.uniform(-20, 20)]))
-            t = np.array([rng.uniform(-0.04, 0.04), rng.uniform(-0.03, 0.03), rng.uniform(*distance)])
+            t = np.array([rng.uniform(-shift[0], shift[0]), rng.uniform(-shift[1], shift[1]), rng.uniform(*distance)])
             out.append((f"view{i:02d}.png", self.render(rot, t - rot.apply(self.centre()))))
         return out

@@ -4,9 +4,13 @@ The result is the intrinsics (pinhole ``fx, fy, cx, cy`` [px] and OpenCV distort
 k3``) of the **upright** photos (EXIF orientation applied, see :mod:`pipeline.camera.image_io`), the RMS
 reprojection error [px] and the error of every view. Refused with :class:`CalibrationError`: photos
 of different sizes, fewer usable views than ``min_views``, and views that do not constrain the
-camera (the board always seen from the same direction: the focal length's standard deviation, from
-OpenCV's ``calibrateCameraExtended``, judged at a corner noise of at least 0.1 px, exceeds
-``max_focal_sigma`` of its value).
+camera: boards that face the camera the same way in every photo (board normals within
+:data:`~pipeline.camera.calibration_coverage.MIN_TILT_SPREAD_DEG` of each other: the focal length trades
+off with the distance), boards seen only in the image centre (no corner in the outer cells of a 4 x 4
+grid: distortion and principal point undetermined), and a focal length whose standard deviation (OpenCV's
+``calibrateCameraExtended``, judged at a corner noise of at least 0.1 px) exceeds ``max_focal_sigma`` of
+its value. A border reached in few places is a warning (:attr:`Calibration.warnings`). Every parameter's
+standard deviation is reported (:attr:`Calibration.sigmas`); see :mod:`pipeline.camera.calibration_coverage`.
 
 Board geometry: ``cols`` x ``rows`` are the INNER corners of a chessboard (a board of 10 x 7 squares
 has 9 x 6 inner corners), or the SQUARES of a ChArUco board; ``square`` is the side of one square
@@ -22,11 +26,15 @@ from typing import Sequence
 import cv2
 import numpy as np
 
+from pipeline.camera.calibration_coverage import coverage
 from pipeline.camera.geometry import Intrinsics
 
 ARUCO_DICTIONARIES = ("DICT_4X4_50", "DICT_4X4_100", "DICT_5X5_50", "DICT_5X5_100", "DICT_6X6_250", "DICT_ARUCO_ORIGINAL")
 """ArUco dictionaries accepted for ChArUco boards (OpenCV names)."""
 
+
+PARAMETERS = ("fx", "fy", "cx", "cy", "k1", "k2", "p1", "p2", "k3")
+"""The intrinsics in the order of OpenCV's ``stdDeviationsIntrinsics``."""
 
 NOISE_FLOOR_PX = 0.1
 """Corner noise [px] at which the focal length's uncertainty is judged (real corners: 0.05-0.3 px)."""
@@ -94,6 +102,11 @@ class Calibration:
         per_view: ``(photo name, RMS error [px])`` of every used view.
         skipped: ``(photo name, reason)`` of every photo not used.
         focal_sigma: Standard deviation of ``fx`` and ``fy`` [px] (OpenCV's, at >= 0.1 px corner noise).
+        sigmas: Standard deviation of every parameter at the same noise, by name (``fx fy cx cy`` [px],
+            ``k1 k2 p1 p2 k3`` [-]).
+        tilt_spread_deg: Largest angle between two views' board normals [deg].
+        border_cells: Outer cells of a 4 x 4 image grid reached by a corner (of 12).
+        warnings: What is poorly determined and what to do (printed by ``morphonavi calibrate``).
     """
 
     intrinsics: Intrinsics
@@ -102,6 +115,10 @@ class Calibration:
     skipped: tuple[tuple[str, str], ...] = ()
     focal_sigma: tuple[float, float] = (0.0, 0.0)
     board: Board = field(default_factory=Board)
+    sigmas: dict[str, float] = field(default_factory=dict)
+    tilt_spread_deg: float = 0.0
+    border_cells: int = 0
+    warnings: tuple[str, ...] = ()
 
     def report(self) -> str:
         """Human-readable summary: intrinsics, RMS and per-view errors, skipped photos."""
@@ -111,6 +128,12 @@ class Calibration:
                  f"fx {i.fx:.2f}  fy {i.fy:.2f}  cx {i.cx:.2f}  cy {i.cy:.2f}  ({i.width}x{i.height} px; "
                  f"sigma fx {self.focal_sigma[0]:.2f}, fy {self.focal_sigma[1]:.2f} px)",
                  "dist " + ", ".join(f"{d:.5f}" for d in i.dist) + "  (k1, k2, p1, p2, k3)"]
+        if self.sigmas:
+            lines.append("sigma " + ", ".join(f"{k} {v:.3g}" for k, v in self.sigmas.items())
+                         + "  (standard deviations at >= 0.1 px corner noise)")
+        lines.append(f"views: board tilt spread {self.tilt_spread_deg:.1f} deg, corners reach {self.border_cells} of "
+                     f"12 border cells")
+        lines.extend(f"warning: {w}" for w in self.warnings)
         worst = max((e for _, e in self.per_view), default=0.0)
         for name, err in self.per_view:
             flag = "  <- worst" if err == worst and len(self.per_view) > 1 else ""
@@ -197,8 +220,15 @@ def calibrate(photos: Sequence[tuple[str, np.ndarray]], board: Board, *, min_vie
             img_pts.append(found[1])
         used.append(name)
     if len(used) < min_views:
-        raise CalibrationError(f"the board was found in {len(used)} of {len(photos)} photo{'' if len(photos) == 1 else 's'}; "
-                               f"at least {min_views} {'is' if min_views == 1 else 'are'} needed (different angles and distances, the board filling much of the frame)")
+        hint = ""
+        if board.kind == "chessboard" and len(used) <= len(photos) // 2:  # mostly not found: the size, likely
+            from pipeline.camera.board_hint import board_size_hint
+
+            missed = {name for name, _ in skipped}
+            hint = board_size_hint([p for p in photos if p[0] in missed], board.cols, board.rows)
+        raise CalibrationError(f"the board was found in {len(used)} of {len(photos)} photo{'' if len(photos) == 1 else 's'}"
+                               f"{hint}; at least {min_views} {'is' if min_views == 1 else 'are'} needed (different "
+                               "angles and distances, the board filling much of the frame)")
     rms, K, dist, _, _, std_intr, _, per_view = cv2.calibrateCameraExtended(
         obj_pts, img_pts, (w0, h0), None, None)
     fx, fy = float(K[0, 0]), float(K[1, 1])
@@ -206,6 +236,14 @@ def calibrate(photos: Sequence[tuple[str, np.ndarray]], board: Board, *, min_vie
     # NOISE_FLOOR_PX, so that near-perfect corners do not hide an ill-posed set of views
     scale = max(1.0, NOISE_FLOOR_PX / rms) if rms > 0 else 1.0
     sigma = (float(std_intr[0, 0]) * scale, float(std_intr[1, 0]) * scale)
+    sigmas = {name: float(v) * scale for name, v in zip(PARAMETERS, np.asarray(std_intr).ravel())}
+    # the geometry of the views first: a straight-on set fits ANY focal length with a small sigma
+    cov = coverage(obj_pts, img_pts, (w0, h0), fx)
+    if not cov.tilted_enough:
+        raise CalibrationError(f"degenerate views: {cov.tilt_problem()} (this set gave fx {fx:.0f} px, which "
+                               "cannot be trusted)")
+    if cov.centre_only:
+        raise CalibrationError(f"poor coverage: {cov.border_problem(w0, h0)}")
     if not all(math.isfinite(v) for v in (*K.ravel(), *dist.ravel(), *sigma)) or fx <= 0 or fy <= 0:
         raise CalibrationError("calibration did not converge (degenerate views): take photos of the board at "
                                "different tilts and distances")
@@ -217,7 +255,9 @@ def calibrate(photos: Sequence[tuple[str, np.ndarray]], board: Board, *, min_vie
     cx, cy = float(K[0, 2]), float(K[1, 2])
     intr = Intrinsics(fx, fy, cx, cy, int(w0), int(h0), tuple(float(d) for d in dist.ravel()[:5]))
     views = tuple((n, float(e)) for n, e in zip(used, np.asarray(per_view).ravel()))
-    return Calibration(intr, float(rms), views, tuple(skipped), sigma, board)
+    warnings = tuple(w for w in (cov.border_warning(w0, h0),) if w)
+    return Calibration(intr, float(rms), views, tuple(skipped), sigma, board, sigmas, cov.tilt_spread_deg,
+                       cov.border_cells, warnings)
 
 
 __all__ = ["ARUCO_DICTIONARIES", "Board", "Calibration", "CalibrationError", "calibrate", "find_charuco",
