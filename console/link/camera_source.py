@@ -9,7 +9,12 @@ A source is read through OpenCV's ``VideoCapture``:
 
 A reader thread pulls frames continuously and keeps only the newest, so :meth:`CameraSource.next`
 (Capture & map) never gets a stale buffered frame: it waits for a frame that arrived AFTER the
-request. Frames are upright (the camera's own orientation; no EXIF in a stream) and must have the
+request. A picture that stops changing while frames keep arriving (a frozen MJPEG server, a relay
+repeating its last frame, a source whose timestamps stop) is *stale* (:mod:`console.link.camera_freshness`):
+:attr:`CameraSource.status` says ``camera stale: the same frame for 4.2 s``, the operator is told once,
+and :meth:`CameraSource.next` refuses it; it only serves a frame that differs from the one before it.
+:attr:`CameraSource.served_at` is the arrival time of the frame last served, to pair it with the robot's
+pose at that time. Frames are upright (the camera's own orientation; no EXIF in a stream) and must have the
 size of the camera file's intrinsics (checked, named). A lost stream (no frame for
 ``lost_after`` s, or the source failing) is logged as a warning once, :attr:`CameraSource.status`
 says so, captures fail with a clear :class:`CameraSourceError`, and the reader reconnects every
@@ -31,6 +36,7 @@ import numpy as np
 from pipeline.camera.geometry import CameraConfig, CameraError
 
 from console.link.base import LinkError
+from console.link.camera_freshness import STALE_AFTER_S, STILL_LEVEL, Freshness, FreshnessTracker
 from console.link.captures import FolderPhoto
 
 log = logging.getLogger(__name__)
@@ -105,6 +111,17 @@ def _open_capture(spec: SourceSpec, open_timeout: float) -> Any:
     return cap
 
 
+def _stamp_ms(cap: Any) -> float | None:
+    """The source's timestamp of the frame just read [ms] (RTSP presentation time), ``None`` if none."""
+    import cv2
+
+    try:
+        v = float(cap.get(cv2.CAP_PROP_POS_MSEC))
+    except Exception:  # noqa: BLE001 - a backend without the property
+        return None
+    return v if v > 0 else None
+
+
 class CameraSource:
     """A live camera serving upright RGB frames with the camera file's intrinsics.
 
@@ -115,15 +132,26 @@ class CameraSource:
         reconnect_every: Seconds between reconnection attempts while lost.
         open_timeout: How long one open / read may block [s].
         preview_interval: Least time between two preview frames [s] (low-rate live preview).
-        on_notice: Called with a sentence when the stream is lost or back (default: logged only).
+        on_notice: Called with a sentence when the stream is lost or back, or its picture freezes or
+            moves again (default: logged only).
+        stale_after: The same picture (or source timestamp) for this long [s] is stale.
+        still_level: Mean absolute difference [grey levels] under which two frames are the same picture.
+        open_capture: Opens the source (``(spec, open_timeout) -> cv2.VideoCapture``-like); tests pass fakes.
 
     Call :meth:`start` (or use it as a context manager) and :meth:`close`.
     """
 
     def __init__(self, source: str, camera: CameraConfig, *, lost_after: float = 3.0, reconnect_every: float = 2.0,
                  open_timeout: float = 5.0, preview_interval: float = 0.5,
-                 on_notice: Callable[[str], None] | None = None) -> None:
+                 on_notice: Callable[[str], None] | None = None, stale_after: float = STALE_AFTER_S,
+                 still_level: float = STILL_LEVEL, open_capture: Callable[[SourceSpec, float], Any] | None = None
+                 ) -> None:
         self.spec = parse_source(source)
+        self._freshness = FreshnessTracker(stale_after, still_level)  # validates both (ValueError, named)
+        self._fresh = Freshness(False, proven=False)
+        self._open_capture = open_capture or _open_capture
+        self.served_at: float | None = None
+        """Arrival time [s since the Unix epoch] of the frame :meth:`next` served last."""
         self.camera = camera
         self.lost_after = float(lost_after)
         self.reconnect_every = float(reconnect_every)
@@ -134,6 +162,7 @@ class CameraSource:
         self._cond = threading.Condition()
         self._frame: np.ndarray | None = None
         self._frame_time = 0.0
+        self._frame_wall = 0.0
         self._seq = 0
         self._preview: np.ndarray | None = None
         self._preview_time = 0.0
@@ -177,12 +206,20 @@ class CameraSource:
         with self._cond:
             if self._frame is not None and self._lost_since is None:
                 age = time.monotonic() - self._frame_time
+                if self._fresh.stale:
+                    return f"{self.spec.label}: {self._fresh.describe()} (last frame {age:.1f} s ago)"
                 return f"{self.spec.label}: live, last frame {age:.1f} s ago"
             if self._lost_since is not None:
                 why = f" ({self._error})" if self._error else ""
                 return (f"{self.spec.label}: stream lost {time.monotonic() - self._lost_since:.0f} s ago{why}; "
                         "reconnecting")
             return f"{self.spec.label}: connecting" + (f" ({self._error})" if self._error else "")
+
+    @property
+    def freshness(self) -> Freshness:
+        """Whether the newest picture is frozen, and for how long."""
+        with self._cond:
+            return self._fresh
 
     @property
     def frames(self) -> int:
@@ -198,21 +235,36 @@ class CameraSource:
 
     def newest(self, after: float | None = None, timeout: float = 5.0) -> tuple[np.ndarray, float]:
         """``(frame, arrival time [time.monotonic()])`` of the newest frame that arrived after
-        ``after`` (default: now), waiting up to ``timeout`` [s].
+        ``after`` (default: now) and shows a new picture (one that differs from the frame before it: a frame
+        equal to its predecessor may be the start of a freeze), waiting up to ``timeout`` [s].
 
         Raises:
-            CameraSourceError: No fresh frame in time (the message says whether the stream is lost).
+            CameraSourceError: No fresh frame in time (the message says whether the stream is lost), or
+                a stale picture (``camera stale: the same frame for 4.2 s``).
         """
         since = time.monotonic() if after is None else after
         deadline = time.monotonic() + timeout
+
+        def ready() -> bool:
+            return (self._frame is not None and self._frame_time > since
+                    and (self._fresh.stale or self._fresh.changed))
+
         with self._cond:
-            while not (self._frame is not None and self._frame_time > since):
+            while not ready():
                 left = deadline - time.monotonic()
                 if left <= 0 or self._stop.is_set():
                     break
                 self._cond.wait(left)
-            if self._frame is not None and self._frame_time > since:
+            if ready() and self._fresh.stale:
+                raise CameraSourceError(f"{self.spec.label}: {self._fresh.describe()}: a frozen picture is not "
+                                        "mapped (check the camera and its stream)")
+            if ready():
+                self.served_at = self._frame_wall
                 return self._frame, self._frame_time
+            unchanged = self._frame is not None and self._frame_time > since and not self._fresh.changed
+        if unchanged:
+            raise CameraSourceError(f"{self.spec.label}: the picture has not changed for {timeout:.1f} s "
+                                    "(a frozen source?): no new frame to map")
         raise CameraSourceError(f"no fresh frame from the camera within {timeout:.1f} s: {self.status}")
 
     def next(self, timeout: float = 5.0) -> FolderPhoto:
@@ -259,7 +311,8 @@ class CameraSource:
             self._notice(f"camera {self.spec.label}: stream lost ({why}); reconnecting every "
                          f"{self.reconnect_every:g} s", logging.WARNING)
 
-    def _got_frame(self, bgr: np.ndarray) -> None:
+    def _got_frame(self, bgr: np.ndarray, stamp_ms: float | None = None) -> None:
+        """A frame from the reader; ``stamp_ms`` is the source's own timestamp [ms] when it has one."""
         import cv2
 
         rgb = np.ascontiguousarray(bgr[:, :, ::-1]) if bgr.ndim == 3 and bgr.shape[2] == 3 else \
@@ -268,7 +321,10 @@ class CameraSource:
         back = False
         with self._cond:
             back = self._lost_since is not None and self._seq > 0
-            self._frame, self._frame_time = rgb, now
+            was_stale = self._fresh.stale
+            self._fresh = self._freshness.update(rgb, now, stamp_ms)
+            froze, moved = self._fresh.stale and not was_stale, was_stale and not self._fresh.stale
+            self._frame, self._frame_time, self._frame_wall = rgb, now, time.time()
             self._seq += 1
             self._lost_since = None
             self._error = None
@@ -282,12 +338,17 @@ class CameraSource:
             self._cond.notify_all()
         if back:
             self._notice(f"camera {self.spec.label}: stream back", logging.INFO)
+        if froze:
+            self._notice(f"camera {self.spec.label}: {self._fresh.describe()}; frames still arrive but the picture "
+                         "does not change: Capture & map refuses it until it moves again", logging.WARNING)
+        if moved:
+            self._notice(f"camera {self.spec.label}: the picture is changing again (camera live)", logging.INFO)
 
     def _run(self) -> None:
         import cv2
 
         while not self._stop.is_set():
-            cap = _open_capture(self.spec, self.open_timeout)
+            cap = self._open_capture(self.spec, self.open_timeout)
             if not cap.isOpened():
                 cap.release()
                 self._mark_lost("cannot open the source")
@@ -303,7 +364,7 @@ class CameraSource:
                 ok, frame = cap.read()
                 now = time.monotonic()
                 if ok and frame is not None and frame.size:
-                    self._got_frame(frame)
+                    self._got_frame(frame, _stamp_ms(cap) if self.spec.kind != "file" else None)
                     last = now
                     if period:
                         next_due += period
