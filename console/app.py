@@ -351,6 +351,13 @@ class ConsoleApp:
             self._job_bar = gui.add_progress_bar(0.0, visible=False, animated=True)
             self._job_md = gui.add_markdown(f"<small>perception: <b>{html.escape(perceiver.label)}</b></small>")
             cap.on_click(self._on_capture)
+            from console.session.look import LookJob  # Look around / Look at: turn in place, capture & map
+            from console.views.look_view import LookView
+
+            self.look = LookJob(session, self.link, self.mapping)
+            self._closers.append(self.look.stop)
+            self.views["look"] = LookView(server, session, self.look,
+                                          lambda: tuple(paths_holder["p"].typed_values()[:2]))  # type: ignore[arg-type]
             from console.views.held_capture import HeldCaptureControls  # Merge / Replace / Discard a held-back capture
 
             self.views["held_capture"] = HeldCaptureControls(server, session, self.mapping)
@@ -427,6 +434,10 @@ class ConsoleApp:
     # --- events ---------------------------------------------------------------------------------------
     def _on_capture(self, event: Any) -> None:
         assert self.mapping is not None
+        look = getattr(self, "look", None)
+        if look is not None and look.running:
+            tell(event.client, "Busy", "a look is running: pause or stop it first", "yellow", 4.0)
+            return
         if not self.mapping.start():
             tell(event.client, "Busy", "a capture is already being mapped", "yellow", 4.0)
 

@@ -111,6 +111,7 @@ class MappingJob:
         self._lock = threading.RLock()
         self._thread: threading.Thread | None = None
         self._held: tuple[Scene, str] | None = None
+        self._job_name = JOB_NAME  # what the progress says runs (Look around runs captures under its own name)
 
     @property
     def held(self) -> str | None:
@@ -152,6 +153,7 @@ class MappingJob:
             if self._thread is not None and self._thread.is_alive():
                 return False
             self._thread = threading.Thread(target=self.run, name="mapping-job", daemon=True)
+            self._job_name = JOB_NAME
             self._report(0.0, "starting")  # every tab sees the capture running from the click on
             self._thread.start()
             return True
@@ -166,11 +168,25 @@ class MappingJob:
         return True
 
     def _report(self, fraction: float, message: str) -> None:
-        self._session.set_job(JobStatus(JOB_NAME, True, max(0.0, min(1.0, fraction)), message))
+        self._session.set_job(JobStatus(self._job_name, True, max(0.0, min(1.0, fraction)), message))
 
-    def run(self) -> bool:
+    def run_as(self, name: str) -> bool:
+        """One cycle in the calling thread as a step of another job (``name`` in the progress, e.g.
+        ``Look around · heading 2/6 (150°)``); ``False`` at once when a capture is already running."""
+        with self._lock:
+            if self._thread is not None and self._thread.is_alive():
+                return False
+            self._thread = threading.current_thread()
+        try:
+            return self.run(name)
+        finally:
+            with self._lock:
+                self._thread = None
+
+    def run(self, name: str = JOB_NAME) -> bool:
         """One capture-and-map cycle in the calling thread; ``True`` on success."""
         t0 = time.perf_counter()
+        self._job_name = name
         try:
             self._report(0.02, "asking the robot for a photo")
             try:
@@ -212,7 +228,7 @@ class MappingJob:
                 with self._lock:
                     self._held = (result.scene, cap_id)
                 text = f"capture {cap_id} held back: {preview.held_back}"
-                self._session.set_job(JobStatus(JOB_NAME, False, 1.0, text))
+                self._session.set_job(JobStatus(name, False, 1.0, text))
                 self._session.notify("Capture held back", f"{text} The map is unchanged: merge it anyway, replace "
                                      "the map with it, or discard it.", "warning")
                 return True
@@ -221,7 +237,9 @@ class MappingJob:
             rejected = preview.rejected
             summary = (f"{n} objects seen ({len(report.added)} new, {len(report.updated)} updated"
                        + (f", {len(rejected)} not used" if rejected else "") + f") in {dt:.1f} s")
-            self._session.set_job(JobStatus(JOB_NAME, False, 1.0, summary))
+            dropped = ("; not used: " + "; ".join(f"{o.label} ({o.reason})" for o in rejected)) if rejected else ""
+            # a close-up drops only what it cannot range: each one and why stays on the panel
+            self._session.set_job(JobStatus(name, False, 1.0, summary + dropped))
             notes = preview.notes() + list(report.notes)
             body = summary + ("; " + "; ".join(notes) if notes else "")
             self._session.notify("Mapped", body, "warning" if rejected else "success")
@@ -231,12 +249,12 @@ class MappingJob:
                 self._session.notify("Check the camera pose", f"capture {cap_id}: {warning}", "warning")
             return True
         except (MappingError, SessionError) as exc:  # SessionError: e.g. an implausible object refused
-            self._session.set_job(JobStatus(JOB_NAME, False, 0.0, "failed", str(exc)))
+            self._session.set_job(JobStatus(self._job_name, False, 0.0, "failed", str(exc)))
             self._session.notify("Capture & map failed", str(exc), "error")
             return False
         except Exception as exc:  # a bug: report it, keep the console alive
             log.exception("mapping job crashed")
-            self._session.set_job(JobStatus(JOB_NAME, False, 0.0, "failed", repr(exc)))
+            self._session.set_job(JobStatus(self._job_name, False, 0.0, "failed", repr(exc)))
             self._session.notify("Capture & map failed", f"internal error: {exc!r}", "error")
             return False
 

@@ -1,0 +1,85 @@
+"""The Look around / Look at buttons (and Pause / Resume / Stop while a look runs).
+
+The buttons turn clicks into :class:`~console.session.look.LookJob` calls; the progress shows in
+the Map folder's job line, as for Capture & map ("Look around: heading 3/6 (210°): turning").
+"Look at goal" faces the point in the Plan folder's Goal x / y fields (a floor click fills them).
+"""
+
+from __future__ import annotations
+
+import threading
+from typing import Any, Callable
+
+import viser
+
+from console.session.look import DEFAULT_HEADINGS, LookJob
+from console.session.session import JOB, RUN, Session, SessionError
+from console.views.client_notice import tell
+
+
+class LookView:
+    """Look buttons in the current GUI container.
+
+    Args:
+        server: The viser server.
+        session: Its job and run status enable the buttons.
+        job: The look job.
+        goal_point: Returns the Goal fields' ``(x, y)`` [m] as typed text, for Look at.
+    """
+
+    def __init__(self, server: viser.ViserServer, session: Session, job: LookJob,
+                 goal_point: Callable[[], tuple[str, str]]) -> None:
+        self._session = session
+        self._job = job
+        self._goal_point = goal_point
+        gui = server.gui
+        self.around = gui.add_button(
+            "Look around", icon=viser.Icon.ROTATE_360,
+            hint=f"Turn in place through {DEFAULT_HEADINGS} headings, capturing and mapping at each (a full circle)")
+        self.look_at = gui.add_button("Look at goal", icon=viser.Icon.EYE,
+                                      hint="Turn to face the point in the Goal x / y fields and capture & map")
+        self.pause = gui.add_button("Pause look", icon=viser.Icon.PLAYER_PAUSE, visible=False,
+                                    hint="Hold the robot; Resume turns on to the next heading")
+        self.resume = gui.add_button("Resume look", icon=viser.Icon.PLAYER_PLAY, visible=False)
+        self.stop = gui.add_button("Stop look", icon=viser.Icon.PLAYER_STOP, visible=False)
+        self.around.on_click(lambda e: self._act(e, lambda: job.look_around(DEFAULT_HEADINGS)))
+        self.look_at.on_click(lambda e: self._act(e, self._look_at_goal))
+        self.pause.on_click(lambda e: self._act(e, job.pause))
+        self.resume.on_click(lambda e: self._act(e, job.resume))
+        self.stop.on_click(lambda e: self._act(e, job.stop))
+        session.subscribe(self._on_event)
+        self.refresh()
+
+    def _look_at_goal(self) -> None:
+        x, y = self._goal_point()
+        try:
+            point = (float(x), float(y))
+        except ValueError:
+            raise SessionError(f"Goal x / y must be numbers [m] to look at, got {x!r}, {y!r}") from None
+        self._job.look_at(point)
+
+    def _act(self, event: Any, action: Callable[[], Any]) -> None:
+        try:
+            action()
+        except SessionError as exc:
+            tell(event.client, "Not possible", str(exc), "yellow", 7.0)
+        self.refresh()
+
+    def _on_event(self, topic: str, payload: Any) -> None:
+        if topic in (JOB, RUN):
+            threading.Thread(target=self.refresh, daemon=True).start()  # never block the session's caller
+
+    def refresh(self) -> None:
+        """Buttons as the look's state allows."""
+        if not self._session.job.running:
+            self._job.wait(1.0)  # the look's last report comes just before its thread ends
+        running, paused = self._job.running, self._job.paused
+        busy = running or self._session.run.active
+        self.around.disabled = busy
+        self.look_at.disabled = busy
+        self.pause.visible = running and not paused
+        self.resume.visible = paused
+        self.stop.visible = running
+
+
+__all__ = ["LookView"]
