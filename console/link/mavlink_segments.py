@@ -7,9 +7,8 @@ speed, landed state, readiness):
 
 - walking: ground-motion targets (:class:`~console.link.mavlink_config.GroundMotion`) to each waypoint;
 - take-off: wait (bounded) until the vehicle is ready, GUIDED, arm, ``MAV_CMD_NAV_TAKEOFF``, climb;
-- flight: ``SET_POSITION_TARGET_LOCAL_NED`` re-sent at the set-point rate until within tolerance; the
-  speeds (``MAV_CMD_DO_CHANGE_SPEED``) go out once position control has started and again after every
-  controller change, and the measured speed is watched (:mod:`~console.link.mavlink_speed`);
+- flight: the configured speeds (``MAV_CMD_DO_CHANGE_SPEED``), then ``SET_POSITION_TARGET_LOCAL_NED``
+  re-sent at the set-point rate until within tolerance;
 - landing: above the spot, *stopped* there (``STILL_DWELL`` of still samples), then LAND until
   ``EXTENDED_SYS_STATE`` says on ground;
 - turn: yaw in place, the position target at where the vehicle is with the turn's yaw (ground or
@@ -32,10 +31,8 @@ import numpy as np
 from planner.mission import SegmentKind
 
 from console.link.base import LinkError, LinkTimeout, RunStatus, SegmentRun
-from console.link.mavlink_commands import Commander, Stopped
+from console.link.mavlink_commands import SPEED_CLIMB, SPEED_DESCENT, SPEED_GROUND, Commander, Stopped
 from console.link.mavlink_config import MavlinkConfig
-from console.link.mavlink_authority import VehicleInControl
-from console.link.mavlink_speed import SpeedGuard
 from console.link.mavlink_state import landed
 from console.link.mavlink_telemetry import LANDED_IN_AIR, LANDED_TAKEOFF, Telemetry
 
@@ -65,7 +62,6 @@ class SegmentExecutor:
         self.config = config
         self.telemetry = telemetry
         self.commander = commander
-        self.speed_guard = SpeedGuard(config, telemetry, commander)
 
     def airborne(self) -> bool:
         """Whether the vehicle is in the air (from its landed state and height)."""
@@ -130,10 +126,6 @@ class SegmentExecutor:
         while True:
             if cancel.is_set():
                 raise Stopped()
-            with self.telemetry.lock:
-                taken = self.telemetry.authority.describe()
-            if taken:  # the vehicle chose another mode: nothing more is sent or decided here
-                raise VehicleInControl(taken)
             here = self.pos()
             if here is not None:
                 if each is not None:
@@ -145,10 +137,14 @@ class SegmentExecutor:
             cancel.wait(period)
 
     def _speeds(self, ground: bool, cancel: threading.Event) -> None:
-        """Velocity targets carry their speed (sent here too); position targets get theirs once position
-        control has started (:meth:`SpeedGuard.before_target`: ArduCopter resets the speed then)."""
-        if ground and self.config.ground.command == "velocity":
-            self.speed_guard.send_speeds(True, cancel)
+        """Command the configured speeds (MAV_CMD_DO_CHANGE_SPEED) for what comes next."""
+        cfg = self.config
+        if ground:
+            self.commander.change_speed(SPEED_GROUND, cfg.ground.speed, cancel, cfg.ground.target_component)
+            return
+        self.commander.change_speed(SPEED_GROUND, cfg.fly_speed, cancel)
+        self.commander.change_speed(SPEED_CLIMB, cfg.climb_rate, cancel)
+        self.commander.change_speed(SPEED_DESCENT, cfg.descent_rate, cancel)
 
     def _go_to(self, run: SegmentRun, cancel: threading.Event, target: np.ndarray, index: int, ground: bool,
                progress: Callable[[float], float], stop: bool = False) -> None:
@@ -174,9 +170,7 @@ class SegmentExecutor:
                 v = d / n * min(cfg.ground.speed, n * cfg.setpoint_rate) if n > 1e-6 else np.zeros(3)
                 self.commander.send_velocity_target((float(v[0]), float(v[1]), 0.0), yaw, comp)
             else:
-                self.speed_guard.before_target(here, ground, yaw, comp, cancel)
                 self.commander.send_position_target((float(target[0]), float(target[1]), float(target[2])), yaw, comp)
-                self.speed_guard.watch(ground, cancel)
             run.update(progress(max(0.0, dist0 - remaining(here))), index)
 
         still_since: list[float] = []  # when the vehicle was first seen there and still (stop only)
