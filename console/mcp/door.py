@@ -340,10 +340,11 @@ class AgentDoor:
         return out
 
     def _plan(self, goal: tuple[float, float, float], what: str, why: str) -> dict[str, Any]:
-        res = self.session.add_goal(goal)
+        before, self.agent_goal = self.agent_goal, tuple(float(v) for v in goal)  # type: ignore[assignment]
+        res = self.session.add_goal(goal)  # the panel labels the new candidate as the agent's (route event)
         if not res.ok:
+            self.agent_goal = before
             raise AgentError(f"goal: {res.message}")
-        self.agent_goal = tuple(float(v) for v in goal)  # type: ignore[assignment]
         self.session.notify("Agent planned a candidate", f"to {what}: {res.message}. It is proposed by the agent: "
                             "Register or Discard it, or wait for the agent's mission proposal"
                             + (f". Why: {why}" if why else ""), "info")

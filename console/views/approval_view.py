@@ -79,6 +79,16 @@ class ApprovalView:
                              session.subscribe(self._on_event)]
         self.refresh()
 
+    @property
+    def note_text(self) -> str:
+        """The note typed for the agent, as the server has it."""
+        return str(self._note.value)
+
+    @property
+    def labelled(self) -> bool:
+        """Whether the 3D view labels a candidate as proposed by the agent."""
+        return self._label is not None
+
     def close(self) -> None:
         for u in self._unsubscribe:
             u()
