@@ -8,8 +8,12 @@ It implements the behaviours the MAVLink link relies on, the way ArduPilot Copte
 - MAV_CMD_COMPONENT_ARM_DISARM (arming only in armable modes and when pre-arm checks pass, else
   MAV_RESULT_FAILED with a ``PreArm: ...`` STATUSTEXT; disarming only when landed);
 - MAV_CMD_NAV_TAKEOFF (only in GUIDED, armed and landed), altitude above the origin in param7;
-- MAV_CMD_DO_CHANGE_SPEED (types 0/1 horizontal, 2 climb, 3 descent); without it the vehicle flies
-  at its WPNAV_SPEED (``fly_speed``);
+- MAV_CMD_DO_CHANGE_SPEED (types 0/1 horizontal, 2 climb, 3 descent); GUIDED entering position
+  control (the first position target after a mode change, a take-off or velocity targets) sets the
+  speed back to WPNAV_SPEED (``fly_speed``), as ``ArduCopter/mode_guided.cpp`` does (see
+  :mod:`mav_emulator_physics`); RTL climbs to ``RTL_ALT`` and flies home (``mode_rtl.cpp``);
+- the vehicle's own mode changes (battery / GCS failsafe, fence, a second GCS), EKF resets, TIMESYNC,
+  duplicated packets, sequence gaps on loss and MAVLink 2 signing: :mod:`mav_emulator_events`;
 - motion with acceleration limits: it arrives at a target decelerating (``accel``), BRAKE and
   LAND stop horizontal motion at ``brake_decel`` (braking distance v^2 / 2a; LAND while moving
   touches down past the spot);
@@ -28,7 +32,8 @@ Faults for tests (attributes): ``heartbeat_enabled`` (silence the heartbeat only
 LOCAL_POSITION_NED / ATTITUDE), ``drop`` (packet loss), ``blocked`` (nothing is sent, incoming
 messages queue and are handled late when unblocked, like a blocked TCP port), ``deny_modes``,
 ``ignore_commands``, ``prearm_failure`` (+ ``reason_after_ack``), ``ekf_ready``,
-``message_interval_supported``, ``streams_need_request``, ``components`` (other components of
+``message_interval_supported``, ``streams_need_request``, ``speed_ignored``, ``duplicate_delay``,
+``signing_passphrase``, ``components`` (other components of
 the system heartbeating: a gimbal 154 ...), ``other_systems`` (other vehicles), ``freeze_motion``.
 """
 
@@ -42,6 +47,9 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from pymavlink import mavutil
+
+from mav_emulator_events import EKF_GPS_GLITCH, VehicleEvents
+from mav_emulator_physics import CopterPhysics
 
 mav = mavutil.mavlink
 MODES = {name: num for num, name in mavutil.mode_mapping_acm.items()}
@@ -73,6 +81,16 @@ class Record:
     dropped_in: int = 0
     dropped_out: int = 0
     late: int = 0  # messages handled after a block
+    late_commands: list[tuple[str, float]] = field(default_factory=list)  # (type, seconds late) after a block
+    mode_sources: list[tuple[str, str]] = field(default_factory=list)  # (mode, "gcs" or the vehicle's reason)
+    target_times: list[float] = field(default_factory=list)  # monotonic [s] of each position target
+    targets_ignored: int = 0  # targets outside GUIDED (ArduPilot ignores them)
+    speed_resets: int = 0  # GUIDED entering position control (speed back to WPNAV_SPEED)
+    max_height: float = 0.0  # highest point flown [m above the origin]
+    rtl_top: float = 0.0  # height RTL climbed to [m]
+    duplicated: int = 0  # duplicate packets sent
+    unsigned_ignored: int = 0  # unsigned messages ignored (signing required)
+    timesyncs: int = 0
 
     @property
     def mode_changes(self) -> list[str]:
@@ -82,7 +100,7 @@ class Record:
     max_speed: float = 0.0  # fastest horizontal speed flown [m/s]
 
 
-class ArduCopterEmulator:
+class ArduCopterEmulator(CopterPhysics, VehicleEvents):
     """A simulated ArduPilot Copter sending to a GCS listening on ``127.0.0.1:gcs_port``.
 
     Args:
@@ -136,10 +154,17 @@ class ArduCopterEmulator:
         self.autopilot_heartbeat_delay = 0.0  # [s] before the autopilot's first heartbeat
         self.other_systems: list[int] = []
         self.freeze_motion = False
-        self.params = {"FS_GCS_ENABLE": 1.0, "FS_GCS_TIMEOUT": 5.0, "FS_EKF_ACTION": 1.0}
+        self.speed_ignored = False  # DO_CHANGE_SPEED accepted but never applied (a firmware quirk)
+        self.duplicate_delay = 0.0  # [s] every packet also arrives this late (a second telemetry link)
+        self.signing_passphrase: str | None = None  # signing required with this key (GCS_Signing.cpp)
+        self.ekf_fault_until = 0.0  # monotonic [s]: EKF_STATUS_REPORT reports a glitch until then
+        self.physics_step = PHYSICS_STEP
+        self.params = {"FS_GCS_ENABLE": 1.0, "FS_GCS_TIMEOUT": 5.0, "FS_EKF_ACTION": 1.0, "RTL_ALT": 1500.0}
         self.record = Record()
         self.lock = threading.RLock()
-        self._queue: list[Any] = []
+        self._queue: list[tuple[Any, float]] = []  # (message, monotonic [s] read) while blocked
+        self._dups: list[tuple[float, bytes]] = []
+        self._boot_ns = time.monotonic_ns()
         self._encoders: dict[tuple[int, int], Any] = {}
         # vehicle state (NED)
         self.mode = "STABILIZE"
@@ -152,6 +177,8 @@ class ArduCopterEmulator:
         self.vtarget: list[float] | None = None  # velocity target (NED)
         self.takeoff_alt: float | None = None
         self.cmd_speed: float | None = None
+        self.guided_sub = "vel"
+        self.rtl_stage = "climb"
         self.battery = 100.0
         self.origin = ORIGIN
         self.streaming: set[str] = set(STREAMS)
@@ -165,6 +192,7 @@ class ArduCopterEmulator:
     def start(self) -> "ArduCopterEmulator":
         if self.streams_need_request:
             self.streaming = set()
+        self._setup_signing()
         self._thread.start()
         return self
 
@@ -213,10 +241,15 @@ class ArduCopterEmulator:
     def _send(self, name: str, *args: Any) -> None:
         if self._silent():
             return
-        if self._lost():
+        m = self.conn.mav
+        msg = getattr(m, name.removesuffix("_send") + "_encode")(*args)
+        if self._lost():  # lost on the way: the sequence number is used all the same (a gap)
             self.record.dropped_out += 1
+            msg.pack(m)
+            m.seq = (m.seq + 1) % 256
             return
-        getattr(self.conn.mav, name)(*args)
+        m.send(msg)
+        self._duplicate(msg.get_msgbuf())
 
     def _send_as(self, system: int, component: int, name: str, *args: Any) -> None:
         if self._silent():
@@ -250,22 +283,16 @@ class ArduCopterEmulator:
                     continue  # rebooting: nothing is heard
                 with self.lock:
                     if self.blocked or self.frozen:
-                        self._queue.append(msg)
+                        self._queue.append((msg, time.monotonic()))
                         continue
-                    if self._queue:  # delivered late, in order, like TCP after a block
-                        queued, self._queue = self._queue, []
-                        self.record.late += len(queued)
-                        for m in queued:
-                            self._handle(m)
+                    self._handle_queue()
                     self._handle(msg)
             now = time.monotonic()
             with self.lock:
-                if not (self.blocked or self.frozen) and self._queue:
-                    queued, self._queue = self._queue, []
-                    self.record.late += len(queued)
-                    for m in queued:
-                        self._handle(m)
+                if not (self.blocked or self.frozen):
+                    self._handle_queue()
                 self._step(now - last)
+                self._send_duplicates()
             last = now
             if now >= next_hb:
                 next_hb = now + 1.0 / self.heartbeat_rate
@@ -283,6 +310,18 @@ class ArduCopterEmulator:
                 if not self.ekf_ready and not self.armed:
                     self.say("PreArm: Need Position Estimate", mav.MAV_SEVERITY_CRITICAL)
             time.sleep(0.004)
+
+    def _handle_queue(self) -> None:
+        """Deliver what queued during a block, late and in order (like TCP after a block)."""
+        if not self._queue:
+            return
+        queued, self._queue = self._queue, []
+        self.record.late += len(queued)
+        now = time.monotonic()
+        for m, t in queued:
+            if m.get_type() in ("COMMAND_LONG", "SET_MODE", "SET_POSITION_TARGET_LOCAL_NED"):
+                self.record.late_commands.append((m.get_type(), now - t))
+            self._handle(m)
 
     def _ms(self) -> int:
         return max(0, int((time.monotonic() - self._boot) * 1000))
@@ -320,13 +359,20 @@ class ArduCopterEmulator:
             self._send("sys_status_send", prearm, prearm, healthy, 500, 15800, -1, int(self.battery), 0, 0, 0,
                        0, 0, 0)
         if "EKF_STATUS_REPORT" in self.streaming:
-            self._send("ekf_status_report_send", EKF_GOOD if self.ekf_ready else 1 | 2, 0.1, 0.1, 0.1, 0.1, 0.0)
+            flags = EKF_GOOD if self.ekf_ready else 1 | 2
+            if time.monotonic() < self.ekf_fault_until:  # a reset / glitch: flagged, variances high
+                self._send("ekf_status_report_send", flags | EKF_GPS_GLITCH, 0.3, 1.2, 0.4, 0.2, 0.0)
+            else:
+                self._send("ekf_status_report_send", flags, 0.1, 0.1, 0.1, 0.1, 0.0)
 
     # --- behaviour -------------------------------------------------------------------------------
     def _handle(self, msg: Any) -> None:
         kind = msg.get_type()
         if kind == "HEARTBEAT":
             self.record.gcs_heartbeats += 1
+        elif kind == "TIMESYNC":
+            self.record.timesyncs += 1
+            self._timesync(msg)
         elif kind == "COMMAND_LONG":
             if msg.target_component not in (0, 1) or msg.target_system not in (0, self.system):
                 self.record.to_others.append((int(msg.command), int(msg.target_component)))
@@ -388,6 +434,7 @@ class ArduCopterEmulator:
                 return self._ack(cmd, mav.MAV_RESULT_FAILED, conf)
             self.record.takeoff_altitudes.append(alt)
             self.takeoff_alt = alt
+            self.guided_sub = "takeoff"
             self.landed_state = mav.MAV_LANDED_STATE_TAKEOFF
             self.target = None
             return self._ack(cmd, mav.MAV_RESULT_ACCEPTED, conf)
@@ -423,102 +470,6 @@ class ArduCopterEmulator:
             self._ack(cmd, mav.MAV_RESULT_ACCEPTED, conf)
             return self.reboot()
         self._ack(cmd, mav.MAV_RESULT_UNSUPPORTED, conf)
-
-    def _enter_mode(self, name: str) -> None:
-        self.mode = name
-        self.record.modes.append(name)
-        self.record.mode_times.append((name, time.monotonic()))
-        self.vtarget = None
-        if name in ("BRAKE", "LOITER", "GUIDED"):
-            if name != "GUIDED" and self.landed_state == mav.MAV_LANDED_STATE_TAKEOFF:
-                self.landed_state = mav.MAV_LANDED_STATE_IN_AIR  # stop climbing where it is
-            self.target = None  # BRAKE / GUIDED without a target: stop (decelerating) and hold
-        if name == "GUIDED":
-            self.cmd_speed = None  # ArduPilot resets the speed to WPNAV_SPEED when GUIDED starts
-        if name == "LAND" and self.landed_state != mav.MAV_LANDED_STATE_ON_GROUND:
-            self.landed_state = mav.MAV_LANDED_STATE_LANDING
-            self.takeoff_alt = None
-
-    def _position_target(self, m: Any) -> None:
-        mask = int(m.type_mask)
-        self.record.targets.append((float(m.x), float(m.y), float(m.z), mask))
-        if self.mode != "GUIDED" or m.coordinate_frame != mav.MAV_FRAME_LOCAL_NED:
-            return
-        on_ground = self.landed_state == mav.MAV_LANDED_STATE_ON_GROUND
-        if not mask & 1024:
-            self.yaw = float(m.yaw)
-        if not mask & 0b111:  # position target
-            if on_ground and abs(m.z - 0.0) > 0.2:
-                return  # a landed copter ignores targets in the air (take off first)
-            self.target = [float(m.x), float(m.y), 0.0 if on_ground else float(m.z)]
-            self.vtarget = None
-        elif not mask & 0b111000:  # velocity target
-            self.vtarget = [float(m.vx), float(m.vy), 0.0 if on_ground else float(m.vz)]
-            self.target = None
-
-    def _brake(self, dt: float, horizontal_only: bool = False) -> None:
-        axes = 2 if horizontal_only else 3
-        n = math.sqrt(sum(self.vel[i] ** 2 for i in range(axes)))
-        if n > 1e-9:
-            k = max(0.0, n - self.brake_decel * dt) / n
-            for i in range(axes):
-                self.vel[i] *= k
-
-    def _approach(self, dt: float, speed: float) -> None:
-        d = [self.target[i] - self.pos[i] for i in range(3)] if self.target else [0.0, 0.0, 0.0]
-        n = math.sqrt(sum(c * c for c in d))
-        want = min(speed, math.sqrt(2 * self.accel * n)) if n > 1e-6 else 0.0
-        desired = [d[i] / n * want if n > 1e-6 else 0.0 for i in range(3)]
-        dv = [desired[i] - self.vel[i] for i in range(3)]
-        m = math.sqrt(sum(c * c for c in dv))
-        k = min(1.0, self.accel * dt / m) if m > 1e-9 else 0.0
-        self.vel = [self.vel[i] + dv[i] * k for i in range(3)]
-        if n <= 1e-3 and m < 1e-3:
-            self.pos = list(self.target)
-
-    def _step(self, dt: float) -> None:
-        """Advance the motion by ``dt`` [s] in steps of at most ``PHYSICS_STEP``: a loop woken late on
-        a loaded machine integrates as finely as an idle one (no overshoot from one long step)."""
-        n = max(1, math.ceil(dt / PHYSICS_STEP))
-        for _ in range(min(n, 2000)):
-            self._physics(dt / n)
-
-    def _physics(self, dt: float) -> None:
-        if dt <= 0 or self.frozen or time.monotonic() < self._silent_until:
-            return
-        ls = self.landed_state
-        if self.freeze_motion:
-            self.vel = [0.0, 0.0, 0.0]
-        elif ls == mav.MAV_LANDED_STATE_TAKEOFF and self.takeoff_alt is not None:
-            self._brake(dt, horizontal_only=True)
-            self.vel[2] = -self.climb_rate
-            if self.pos[2] + self.vel[2] * dt <= -self.takeoff_alt:
-                self.vel[2] = (-self.takeoff_alt - self.pos[2]) / dt
-                self.landed_state = mav.MAV_LANDED_STATE_IN_AIR
-                self.target = [self.pos[0], self.pos[1], -self.takeoff_alt]
-        elif ls == mav.MAV_LANDED_STATE_LANDING or (self.mode == "LAND" and ls == mav.MAV_LANDED_STATE_IN_AIR):
-            self.landed_state = mav.MAV_LANDED_STATE_LANDING
-            self._brake(dt, horizontal_only=True)  # LAND does not stop horizontal motion at once
-            self.vel[2] = min(self.descent_rate, -self.pos[2] / dt)
-            if self.pos[2] + self.vel[2] * dt >= -1e-9:
-                self.landed_state = mav.MAV_LANDED_STATE_ON_GROUND
-                self.armed = False  # ArduPilot disarms after landing
-                self.target = None
-                self.vel = [0.0, 0.0, 0.0]
-                self.pos[2] = 0.0
-        elif self.mode == "GUIDED" and self.vtarget is not None:
-            self.vel = list(self.vtarget)
-        elif self.mode == "GUIDED" and self.target is not None:
-            on_ground = ls == mav.MAV_LANDED_STATE_ON_GROUND
-            cap = self.cmd_speed or (self.walk_speed if on_ground else self.wpnav_speed)
-            self._approach(dt, min(cap, self.walk_speed) if on_ground else cap)
-        else:
-            self._brake(dt)  # BRAKE, LOITER, GUIDED without a target, STABILIZE on the ground
-        self.pos = [self.pos[i] + self.vel[i] * dt for i in range(3)]
-        if self.landed_state == mav.MAV_LANDED_STATE_ON_GROUND:
-            self.pos[2], self.vel[2] = 0.0, 0.0
-        self.record.max_speed = max(self.record.max_speed, math.hypot(self.vel[0], self.vel[1]))
-        self.battery = max(0.0, self.battery - (0.05 if self.armed else 0.001) * dt)
 
 
 def free_udp_port() -> int:

@@ -104,12 +104,19 @@ def link_options(args: argparse.Namespace) -> dict[str, object]:
     from console.link.ned import NedFrame
 
     ned = NedFrame(origin=args.ned_origin, north_yaw=math.radians(args.north_deg))
-    options: dict[str, object] = {"config": MavlinkConfig(ned=ned, ground=GroundMotion(command=args.ground_command)),
+    options: dict[str, object] = {"config": MavlinkConfig(ned=ned, ground=GroundMotion(command=args.ground_command),
+                                                          signing_key=args.mavlink_key),
                                   "tlog": args.session}  # the MAVLink traffic, as a .tlog in the session folder
     source = camera_source(args)
     if source is not None:
         options.update(camera=source, mount=source.camera.mount)  # type: ignore[attr-defined]
     return options
+
+
+def _signing_key(text: str) -> str:
+    if not text.strip():
+        raise argparse.ArgumentTypeError("must not be empty (leave --mavlink-key out for no signing)")
+    return text
 
 
 def add_console_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:  # type: ignore[type-arg]
@@ -179,6 +186,10 @@ def add_console_parser(subparsers: argparse._SubParsersAction) -> argparse.Argum
                      help="direction of north, counter-clockwise from world +x [deg] (default 90: world +y)")
     mav.add_argument("--ground-command", choices=("position", "velocity"), default="position",
                      help="walking segments: position targets at ground height (default) or velocity targets")
+    mav.add_argument("--mavlink-key", type=_signing_key, default=None, metavar="KEY",
+                     help="MAVLink 2 signing: the vehicle's passphrase (SHA-256 gives the key, as MAVProxy's "
+                          "'signing setup') or the 32-byte key as 64 hex digits; needed when the vehicle "
+                          "requires signed messages (it ignores unsigned commands)")
     p.set_defaults(func=cmd_console)
     return p
 

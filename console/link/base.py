@@ -88,6 +88,16 @@ class RobotState:
         warnings: Standing warnings about the link or the vehicle (shared system id, failsafe
             parameters off, world frame moved by a reboot ...).
         link_epoch: Counts detected reboots / reconnects of the robot since the link opened.
+        link_quality: The link's quality for the operator (``"link 97 % (3 % lost, RTT 12 ms)"``), or ``""``.
+        link_loss: Fraction of the robot's packets lost recently, in [0, 1] (``None``: unknown).
+        link_rtt: Round-trip time to the robot [s] (``None``: unknown).
+        vehicle_control: ``""`` while the console may command the robot; else why not, in the robot's
+            words (``"vehicle took control: mode RTL (Battery 1 is low ...)"``): the console sends
+            nothing until the operator takes control again.
+        estimator: ``""`` when the robot's position estimate is trusted; else why not (a position jump,
+            EKF flags / variances).
+        estimator_resets: Counts position jumps and new estimator faults since the link opened.
+        position_jump: Size of a position jump in the last 10 s [m] (0 when none).
     """
 
     time: float
@@ -110,6 +120,13 @@ class RobotState:
     readiness: str = ""
     warnings: tuple[str, ...] = ()
     link_epoch: int = 0
+    link_quality: str = ""
+    link_loss: float | None = None
+    link_rtt: float | None = None
+    vehicle_control: str = ""
+    estimator: str = ""
+    estimator_resets: int = 0
+    position_jump: float = 0.0
 
     @property
     def pose(self) -> Pose:

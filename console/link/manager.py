@@ -22,7 +22,11 @@ stay in charge:
 - **reboot / reconnect** of the robot (``RobotState.link_epoch`` changes) during a segment holds
   and pauses the mission with the reason and the link's warnings (e.g. a moved EKF origin);
 - **readiness**: before a segment the manager waits (up to ``ready_timeout``) for a valid
-  position instead of failing at once.
+  position instead of failing at once;
+- **mode authority, estimator trust, workspace** (:mod:`~console.link.manager_safety`): a vehicle
+  that chose its own mode pauses the mission without a command and resume waits for
+  :meth:`take_control`; a position jump or estimator fault holds and pauses; flight outside the
+  workspace is warned about.
 
 Positions are world frame (z up) [m]; times [s]. Listeners receive :class:`MissionEvent` on the
 manager's thread and must return quickly.
@@ -259,6 +263,10 @@ class MissionManager(SafetyMixin):
         if st is None or not st.link_ok or st.link_age > self.failsafe_after:
             raise MissionStateError("cannot resume: the robot is not heard from "
                                     f"({st.health if st else 'no state'})")
+        taken = self._vehicle_control()
+        if taken:
+            raise MissionStateError(f"cannot resume: {taken}; take control first (the console then switches "
+                                    "the vehicle back to GUIDED)")
         with self._cond:
             self._resume = True
             self._progress = replace(self._progress, status=MissionStatus.RUNNING, message="resuming")
@@ -305,6 +313,8 @@ class MissionManager(SafetyMixin):
         except Exception as exc:  # never die silently
             log.exception("mission worker failed")
             self._emit("error", f"mission stopped by an internal error: {exc}", status=MissionStatus.ABORTED)
+        finally:  # the mission is over: the vehicle's later mode changes are its own
+            getattr(self.link, "release_control", lambda: None)()
 
     def _execute(self, mission: Mission) -> None:
         segs = mission.segments
@@ -385,15 +395,26 @@ class MissionManager(SafetyMixin):
             return "paused"
         with self._cond:
             self._run = run
-        epoch = self._state().link_epoch
+        epoch, resets = self._state().link_epoch, self._state().estimator_resets
         deadline = time.monotonic() + self._deadline(part)
         while not run.done:
             st = self._state()
+            self._check_workspace(st)
+            if st.estimator_resets != resets and not self._link_lost():
+                if is_main:
+                    self._resume_point = original_index(mission.segments[index], part, run.next_waypoint)
+                return self._stop_paused(run, f"{what}: the robot's position estimate is not trusted "
+                                              f"({st.estimator or 'estimator reset'})")
             if st.link_epoch != epoch and not self._link_lost():
                 if is_main:
                     self._resume_point = original_index(mission.segments[index], part, run.next_waypoint)
                 return self._stop_paused(run, f"{what}: the robot reconnected or rebooted ("
                                          + "; ".join((st.health,) + st.warnings) + ")")
+            taken = self._vehicle_control()
+            if taken and not self._rebooted(epoch):
+                if is_main:
+                    self._resume_point = original_index(mission.segments[index], part, run.next_waypoint)
+                return self._took_control(run, what, taken)
             if time.monotonic() > deadline:
                 if is_main:
                     self._resume_point = original_index(mission.segments[index], part, run.next_waypoint)
@@ -431,6 +452,13 @@ class MissionManager(SafetyMixin):
         if is_main:
             self._resume_point = original_index(mission.segments[index], part, run.next_waypoint)
         where = {"segment_fraction": frac, "fraction": (base + frac * length) / total} if is_main else {}
+        taken = self._vehicle_control()
+        if status is RunStatus.FAILED and (taken or (run.error or "").startswith("vehicle took control")):
+            if self._rebooted(epoch):
+                return self._stop_paused(run, f"{what}: the robot reconnected or rebooted ("
+                                         + "; ".join((self._state().health,) + self._state().warnings) + ")")
+            if taken:
+                return self._took_control(None, what, taken)
         if status is RunStatus.HELD or pausing:
             self._emit("info", f"mission paused during {what}", status=MissionStatus.PAUSED, **where)
         else:
@@ -450,6 +478,7 @@ class MissionManager(SafetyMixin):
                     break
                 status = self._progress.status
                 self._cond.wait(self.poll)
+            self._check_workspace(self.link.latest_state())
             if status is not MissionStatus.FAILSAFE and self._link_lost():
                 self._failsafe()
             elif status is MissionStatus.FAILSAFE and not self._told_back and self._link_back():

@@ -9,6 +9,15 @@
   during the hold, just before the landing, or before the landing has taken effect pauses the
   mission instead (the landing is cancelled); the operator is told what the robot really does
   when the link returns;
+- a failsafe action is decided only while the link is still stale: heartbeats that return without a
+  fresh position first get ``FRESH_WAIT`` seconds to bring one; whatever is said or decided after the
+  link returns is built from telemetry received after it returned (:meth:`_fresh_state`);
+- mode authority: a robot that switched to a mode the console did not command (RTL, LAND, BRAKE by a
+  fence, the pilot's switch ...) ends the console's control: no hold, no mode command, the mission
+  pauses naming the mode and the vehicle's reason; resume is refused until the operator takes control
+  (:meth:`take_control`, which says first what the vehicle is doing);
+- estimator trust: a position jump or estimator fault during a segment holds and pauses;
+- flight outside the mission's workspace (an RTL climbing above it) is warned about;
 - every link segment has a watchdog deadline from its length and ``watchdog_speeds``;
 - before a segment the manager waits (up to ``ready_timeout``) for a valid position.
 
@@ -24,7 +33,12 @@ import numpy as np
 
 from planner.mission import MissionSegment, SegmentKind
 
-from console.link.base import LinkError, Mode, RunStatus, SegmentRun
+from console.link.base import LinkError, Mode, RobotState, RunStatus, SegmentRun
+
+FRESH_WAIT = 2.0
+"""How long [s] a failsafe waits, once heartbeats return, for fresh telemetry before acting on staleness."""
+WORKSPACE_MARGIN = 0.3
+"""How far [m] outside the mission's bounds the robot may be before it is warned about."""
 
 
 class SafetyMixin:
@@ -91,15 +105,91 @@ class SafetyMixin:
     def _link_back(self) -> bool:
         return self.link.link_age_now() <= self.failsafe_after
 
-    def _robot_now(self) -> str:
-        """What the robot is really doing, from a fresh state sample (waits briefly for one)."""
-        end = time.monotonic() + 2.0
-        st = self.link.latest_state()
-        while (st is None or not (st.link_ok and st.position_valid)) and time.monotonic() < end:
-            time.sleep(self.poll)
+    def _heard_again(self) -> bool:
+        """Heartbeats are back (the position may still be stale): not the moment to act on staleness."""
+        hb = getattr(self.link, "heartbeat_age", None)
+        return hb is not None and hb() <= self.failsafe_after
+
+    def _fresh_state(self, timeout: float = 3.0) -> RobotState | None:
+        """A state built only from telemetry received from now on (the link's ``fresh_state``), else
+        the latest sample when the link cannot tell."""
+        fresh = getattr(self.link, "fresh_state", None)
+        if fresh is None:
+            return self.link.latest_state()
+        return fresh(time.monotonic(), timeout)
+
+    def _vehicle_control(self) -> str:
+        """Live: ``""`` while the console may command the robot, else ``vehicle took control: ...``."""
+        return str(getattr(self.link, "vehicle_control", "") or "")
+
+    def take_control(self, confirm: bool = False) -> str:
+        """Take control back from a vehicle that chose its own mode. Without ``confirm`` only returns
+        the question to put to the operator (what the vehicle is doing now); with ``confirm`` the
+        console may command it again (resume then switches it to GUIDED). Returns what was done."""
+        taken = self._vehicle_control()
+        if not taken:
+            return "the console already has control"
+        st = self._fresh_state(2.0) or self.link.latest_state()
+        doing = self._describe(st) if st is not None else "no state"
+        if not confirm:
+            return (f"{taken}; {doing}. Take control? Resume will then switch the vehicle to GUIDED and fly the "
+                    "mission from where it is")
+        self.link.take_control()
+        self._emit("warning", f"operator took control back ({taken}; {doing}): resume continues the mission")
+        return "control taken: resume continues the mission"
+
+    def _rebooted(self, epoch: int, wait: float = 1.0) -> bool:
+        """Whether a mode the console did not command is the robot's reboot (its first heartbeats are in
+        the boot mode before its clock shows the reboot): waits up to ``wait`` [s] for the link epoch to
+        change or the claim to be released."""
+        end = time.monotonic() + wait
+        while time.monotonic() < end:
             st = self.link.latest_state()
+            if (st is not None and st.link_epoch != epoch) or not self._vehicle_control():
+                return True
+            time.sleep(self.poll)
+        return False
+
+    def _took_control(self, run: SegmentRun | None, what: str, taken: str) -> str:
+        """The vehicle chose its own mode: pause without sending anything; returns ``paused``."""
+        if run is not None:
+            run.wait(1.0)  # the segment stops by itself (it sends nothing more)
+        self._emit("error", f"{what}: {taken}; mission paused: the console sends nothing until the operator "
+                            "takes control (take control, then resume)", status=self._status_enum.PAUSED)
+        return "paused"
+
+    def _check_workspace(self, st: RobotState | None) -> None:
+        """Warn once per excursion when the robot is outside the mission's bounds."""
+        mission = getattr(self, "_mission", None)
+        if mission is None or st is None or not st.position_valid:
+            return
+        lo = np.asarray(mission.bounds_min, dtype=np.float64) - WORKSPACE_MARGIN
+        hi = np.asarray(mission.bounds_max, dtype=np.float64) + WORKSPACE_MARGIN
+        p = np.asarray(st.position, dtype=np.float64)
+        outside = bool(np.any(p < lo) or np.any(p > hi))
+        if outside and not getattr(self, "_outside_told", False):
+            axes = []
+            for i, name in enumerate("xyz"):
+                if p[i] > hi[i]:
+                    axes.append(f"{name} {p[i]:.2f} m is above the workspace's {mission.bounds_max[i]:.2f} m")
+                elif p[i] < lo[i]:
+                    axes.append(f"{name} {p[i]:.2f} m is below the workspace's {mission.bounds_min[i]:.2f} m")
+            mode = f" (autopilot mode {st.autopilot_mode})" if st.autopilot_mode else ""
+            self._emit("warning", f"the robot is outside the workspace{mode}: {'; '.join(axes)}")
+        self._outside_told = outside
+
+    def _robot_now(self) -> str:
+        """What the robot is really doing, from telemetry received after now (waits up to 3 s for it)."""
+        st = self._fresh_state()
         if st is None:
-            return "no robot state"
+            st = self.link.latest_state()
+            if st is None:
+                return "no robot state"
+            return "no fresh telemetry yet; last known: " + self._describe(st)
+        return self._describe(st)
+
+    @staticmethod
+    def _describe(st: RobotState) -> str:
         where = "on the ground" if st.landed else "in the air"
         ap = f", autopilot mode {st.autopilot_mode}" if st.autopilot_mode else ""
         pos = (f" at ({st.position[0]:.2f}, {st.position[1]:.2f}, {st.position[2]:.2f})" if st.position_valid
@@ -115,6 +205,11 @@ class SafetyMixin:
             self._failsafe_acting = True
             self._told_back = False
         try:
+            taken = self._vehicle_control()
+            if taken:  # the vehicle flies its own mode: the console neither holds nor lands it
+                self._emit("warning", f"FAILSAFE: robot not heard for {self.link.link_age_now():.1f} s ({why}); "
+                                      f"{taken}: the console sends nothing", status=self._status_enum.FAILSAFE)
+                return
             self._emit("warning", f"FAILSAFE: robot not heard for {self.link.link_age_now():.1f} s ({why}): "
                                   "holding", status=self._status_enum.FAILSAFE)
             deadline = time.monotonic() + self.failsafe_hold  # counted from the failsafe, not the hold's ACK
@@ -134,8 +229,15 @@ class SafetyMixin:
                 self._emit("warning", "FAILSAFE: the robot is on the ground; the mission is kept "
                                       "(resume once the link is back)")
                 return
+            if self._heard_again() and not self._link_back():  # heartbeats back, position not yet: wait for it
+                end = time.monotonic() + FRESH_WAIT
+                while not self._link_back() and time.monotonic() < end:
+                    time.sleep(self.poll)
             if self._link_back():  # heard again at the last moment: no landing
                 self._restored("before the failsafe landing")
+                return
+            if self._vehicle_control():
+                self._emit("warning", f"FAILSAFE: {self._vehicle_control()}: the console does not land it")
                 return
             self._emit("warning", f"FAILSAFE: link still lost after {self.failsafe_hold:.1f} s "
                                   f"({self.link.link_age_now():.1f} s without fresh telemetry): landing where the "
@@ -149,11 +251,13 @@ class SafetyMixin:
                 return
             end = time.monotonic() + max(30.0, 10 * self.failsafe_hold)
             while not land.done and time.monotonic() < end:
-                st = self.link.latest_state()
-                if self._link_back() and st is not None and st.mode is not Mode.LANDING and not st.landed:
-                    self.link.abort()  # heard again before the landing took effect: cancel it
-                    self._restored("before the failsafe landing took effect (landing cancelled)")
-                    return
+                if self._link_back():
+                    st = self._fresh_state(1.0)  # only what the vehicle said after it came back
+                    if st is not None and st.mode is not Mode.LANDING and not st.landed \
+                            and st.autopilot_mode != "LAND" and not self._vehicle_control():
+                        self.link.abort()  # heard again before the landing took effect: cancel it
+                        self._restored("before the failsafe landing took effect (landing cancelled)")
+                        return
                 land.wait(self.poll)
             if land.status is RunStatus.DONE:
                 self._emit("warning", "FAILSAFE: landed; the mission is kept (resume once the link is back)")

@@ -23,6 +23,10 @@ re-sent until within tolerance; landing = above the spot, *stopped* there, then 
 ``EXTENDED_SYS_STATE`` says on ground. A hold is BRAKE in the air (a target where the robot is on
 the ground) and the run is reported HELD once the vehicle is still. Nothing is computed from an
 invalid or stale position: segment execution waits (the mission manager's failsafe decides).
+
+Mode authority (:mod:`~console.link.mavlink_authority`): once the vehicle switches to a mode the
+console did not command, the running segment fails naming the mode and the vehicle's reason, hold /
+abort send nothing, and no segment starts until the operator calls :meth:`MavlinkLink.take_control`.
 """
 
 from __future__ import annotations
@@ -41,6 +45,7 @@ from planner.mission import MissionSegment, SegmentKind
 
 from console.link.base import CaptureResult, LinkError, LinkTimeout, RobotLink, RobotState, RunStatus, SegmentRun
 from console.link.captures import CapturesFolder
+from console.link.mavlink_authority import VehicleInControl
 from console.link.mavlink_commands import (POSITION_ONLY_MASK, POSITION_YAW_MASK, VELOCITY_ONLY_MASK, Commander, Stopped,
                                copter_modes)
 from console.link.mavlink_config import GroundMotion, MavlinkConfig
@@ -84,12 +89,16 @@ class MavlinkLink(RobotLink):
         self.telemetry = Telemetry(config.source_system, config.heartbeat_timeout, config.autopilot_component,
                                    config.max_range, config.max_speed, on_epoch=self._on_epoch)
         self.transport = MavTransport(url, config.source_system, config.source_component, self.telemetry.handle,
-                                      tlog, on_reconnect=self.telemetry.new_epoch)
+                                      tlog, on_reconnect=self.telemetry.new_epoch,
+                                      silence=self.telemetry.heartbeat_age, gate_after=config.heartbeat_timeout,
+                                      signing_key=config.signing_key, on_timesync=self._timesync_sent)
+        self.telemetry.signing_key_set = config.signing_key is not None
         self.commander = Commander(self.transport, self.telemetry, config.ned, self._target, config.ack_timeout,
                                    config.retries, config.command_max_age, config.nack_window, self._counters)
         self.streams = StreamKeeper(config.message_rate, self.telemetry, self.transport, self.commander.command,
                                     self._target, stale_after=config.pose_timeout)
         self.segments = SegmentExecutor(config, self.telemetry, self.commander)
+        self.segments.speed_guard.stop = self._stop_here
         self._state_thread: threading.Thread | None = None
         self._run: SegmentRun | None = None
         self._run_cancel = threading.Event()
@@ -163,6 +172,32 @@ class MavlinkLink(RobotLink):
             self._state_thread.join(timeout=2.0)
             self._state_thread = None
 
+    def _timesync_sent(self, ts1: int) -> None:
+        with self.telemetry.lock:
+            sent = self.telemetry.timesync_sent
+            sent[ts1] = time.monotonic()
+            for k in list(sent)[:-20]:
+                del sent[k]
+
+    # --- mode authority --------------------------------------------------------------------------
+    @property
+    def vehicle_control(self) -> str:
+        """``""`` while the console may command the vehicle, else ``vehicle took control: mode ...``."""
+        with self.telemetry.lock:
+            return self.telemetry.authority.describe()
+
+    def take_control(self) -> None:
+        """The operator takes control again after the vehicle chose its own mode: the next segment may
+        switch it to GUIDED. Nothing is sent here."""
+        with self.telemetry.lock:
+            self.telemetry.authority.take_control()
+        self.telemetry.clear_warning("authority")
+
+    def release_control(self) -> None:
+        """The console no longer claims the vehicle (mission over): its mode changes are its own."""
+        with self.telemetry.lock:
+            self.telemetry.authority.release()
+
     def _on_epoch(self, reason: str) -> None:
         """A reboot / reconnect: ask for the streams, origin and parameters again."""
         self.streams.renew()
@@ -196,6 +231,23 @@ class MavlinkLink(RobotLink):
         hb = self.telemetry.heartbeat_age()
         pose = self.telemetry.pose_age()
         return max(hb, pose) if math.isfinite(pose) else hb
+
+    def fresh_state(self, since: float, timeout: float) -> RobotState | None:
+        """A state built only from telemetry received after ``since`` (monotonic [s]): a heartbeat, a
+        valid position and (if the vehicle sends it) EXTENDED_SYS_STATE; ``None`` if that does not come
+        within ``timeout`` [s]. What is said after a link returns is built from this, never from the
+        samples of before."""
+        tel = self.telemetry
+
+        def fresh() -> bool:
+            v = tel.v
+            ext = v.stream_time.get("EXTENDED_SYS_STATE")
+            return v.last_heartbeat > since and v.pos_time > since and (ext is None or ext > since)
+
+        with tel.lock:
+            if not tel.lock.wait_for(fresh, timeout):
+                return None
+        return self._make_state()
 
     def _make_state(self) -> RobotState | None:
         run = self._run
@@ -243,6 +295,9 @@ class MavlinkLink(RobotLink):
         for w in segment.waypoints:
             if not all(math.isfinite(float(c)) for c in w):
                 raise LinkError(f"{segment.kind.value} segment: waypoint {w} is not finite")
+        taken = self.vehicle_control
+        if taken:
+            raise VehicleInControl(f"{taken}: take control first")
         with self._run_lock:
             if self._run is not None and not self._run.done:
                 raise LinkError(f"a {self._run.segment.kind.value} segment is still running: hold or abort it first")
@@ -258,6 +313,9 @@ class MavlinkLink(RobotLink):
         """Land where the vehicle is now: straight to LAND (no flight to a remembered spot)."""
         if not self.connected:
             raise LinkError("the MAVLink link is not connected")
+        taken = self.vehicle_control
+        if taken:  # the vehicle flies its own mode (RTL, LAND ...): the console does not interfere
+            raise VehicleInControl(f"{taken}: the console does not land it")
         here = self.segments.pos()
         if here is None:
             st = self.latest_state()
@@ -309,6 +367,11 @@ class MavlinkLink(RobotLink):
 
     def _stop_and_finish(self, status: RunStatus, why: str) -> None:
         run = self._cancel_run(status, why)
+        taken = self.vehicle_control
+        if taken:  # nothing is sent: the vehicle flies its own mode
+            if run is not None:
+                run.finish(status, f"{why}: nothing sent, {taken}")
+            return
         try:
             self._stop_here()
             note = self._settle()

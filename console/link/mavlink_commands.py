@@ -8,6 +8,14 @@ after the command was first sent and no later than ``nack_window`` after the ref
 sends ``Arm: Need Position Estimate`` just after the ACK). A command is never re-sent more than
 ``max_age`` seconds after it was decided, so nothing goes out late after a link outage.
 
+Mode authority: every mode command, arming, take-off and target first checks that the vehicle is
+still in the console's control (:class:`~console.link.mavlink_authority.ModeAuthority`); a vehicle that
+switched mode by itself gets nothing (:class:`~console.link.mavlink_authority.VehicleInControl`).
+The controller in use is tracked (``controller``: ``pos`` after a position target, ``vel``, ``other``
+after a mode change or a take-off) because ArduCopter resets the speed when GUIDED enters position
+control (``ArduCopter/mode_guided.cpp``): ``controller_changes`` counts the entries into position
+control so the speed can be sent again after each.
+
 Also here: modes by name (``MAV_CMD_DO_SET_MODE`` with Copter custom mode numbers), arming,
 take-off (``MAV_CMD_NAV_TAKEOFF``, altitude above the local origin in ``param7``), speeds
 (``MAV_CMD_DO_CHANGE_SPEED``) and ``SET_POSITION_TARGET_LOCAL_NED`` targets (world frame in,
@@ -23,6 +31,7 @@ import time
 from typing import Any, Callable
 
 from console.link.base import CommandRejected, LinkError, LinkTimeout
+from console.link.mavlink_authority import VehicleInControl
 from console.link.mavlink_telemetry import Telemetry
 from console.link.mavlink_transport import MavTransport, mavutil
 from console.link.ned import NedFrame
@@ -82,6 +91,14 @@ class Commander:
         self.modes = copter_modes()
         self.mode_names = {v: k for k, v in self.modes.items()}
         self._boot = time.monotonic()
+        self.bad_signatures: Callable[[], int] = lambda: transport.bad_signatures
+        self.controller = "other"  # "pos", "vel" or "other" (after a mode change, a take-off)
+        self.controller_changes = 0  # entries into position control
+
+    def check_control(self, what: str) -> None:
+        '''Raise VehicleInControl if the vehicle switched to a mode the console did not command.'''
+        with self.tel.lock:
+            self.tel.authority.check(what)
 
     # --- the handshake ---------------------------------------------------------------------------
     def command(self, command: int, params: tuple[float, ...], what: str,
@@ -142,7 +159,18 @@ class Commander:
         if cancel is not None and cancel.is_set():
             raise Stopped()
         raise LinkTimeout(f"{what}: no COMMAND_ACK from the vehicle after {sent} attempt(s) "
-                          f"({self.ack_timeout:g} s each)")
+                          f"({self.ack_timeout:g} s each)" + self.signing_hint())
+
+    def signing_hint(self) -> str:
+        """Why commands may go unanswered: the vehicle signs its messages (MAVLink 2 signing) and so
+        ignores unsigned commands (GCS_Signing.cpp), or our key does not match its signatures."""
+        if self.tel.quality.signed and not self.tel.signing_key_set:
+            return ("; signing required: the vehicle signs its messages and ignores unsigned commands: set a key "
+                    "with --mavlink-key (the vehicle's MAVLink 2 signing passphrase)")
+        if self.tel.signing_key_set and self.bad_signatures() > 0:
+            return ("; signing key mismatch: the vehicle's signatures do not match --mavlink-key, so it ignores "
+                    "our commands: use the vehicle's key")
+        return ""
 
     def _wait_ack(self, command: int, cancel: threading.Event | None) -> tuple[Any, float] | None:
         mav = mavutil().mavlink
@@ -181,10 +209,24 @@ class Commander:
         key = name.upper()
         if key not in self.modes:
             raise LinkError(f"unknown ArduPilot Copter mode {name!r}; known: {', '.join(sorted(self.modes))}")
-        if self.vehicle_mode() == key:
-            return
-        self.command(mav.MAV_CMD_DO_SET_MODE, (mav.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED, self.modes[key]),
-                     f"mode change to {key}", verify=lambda: self.vehicle_mode() == key, cancel=cancel)
+        auth = self.tel.authority
+        with self.tel.lock:
+            auth.check(f"mode change to {key}")
+            # already there (a heartbeat from before our last mode command does not count)
+            if self.vehicle_mode() == key and auth.expected in (None, key):
+                auth.commanded(key, True)
+                return
+            auth.commanding(key)
+        ok = False
+        try:
+            self.command(mav.MAV_CMD_DO_SET_MODE, (mav.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED, self.modes[key]),
+                         f"mode change to {key}", verify=lambda: self.vehicle_mode() == key, cancel=cancel)
+            ok = True
+        finally:
+            with self.tel.lock:
+                auth.commanded(key, ok)
+            self.controller = "other"
+
 
     def armed(self) -> bool:
         with self.tel.lock:
@@ -192,6 +234,7 @@ class Commander:
 
     def arm(self, cancel: threading.Event | None = None) -> None:
         mav = mavutil().mavlink
+        self.check_control("arming")
         self.command(mav.MAV_CMD_COMPONENT_ARM_DISARM, (1,), "arming", verify=self.armed, cancel=cancel)
 
     def disarm(self, cancel: threading.Event | None = None) -> None:
@@ -204,21 +247,32 @@ class Commander:
         mav = mavutil().mavlink
         if not math.isfinite(altitude):
             raise LinkError(f"take-off altitude must be finite, got {altitude}")
+        self.check_control("take-off")
+        self.controller = "other"
         self.command(mav.MAV_CMD_NAV_TAKEOFF, (0, 0, 0, math.nan, 0, 0, altitude),
                      f"take-off to {altitude:.2f} m", verify=climbing, cancel=cancel)
 
     def change_speed(self, speed_type: int, speed: float, cancel: threading.Event | None = None,
                      component: int | None = None) -> bool:
-        """MAV_CMD_DO_CHANGE_SPEED (type 1 ground, 2 climb, 3 descent) [m/s]; False if refused."""
+        """MAV_CMD_DO_CHANGE_SPEED (type 1 ground, 2 climb, 3 descent) [m/s]; False if refused or not
+        acknowledged. An optional command: a lost ACK is a warning, never a failure (the measured
+        speed is watched, :mod:`~console.link.mavlink_segments`)."""
         mav = mavutil().mavlink
         if not (speed > 0 and math.isfinite(speed)):
             raise LinkError(f"speed must be > 0 m/s, got {speed}")
+        self.check_control("speed")
         try:
             self.command(mav.MAV_CMD_DO_CHANGE_SPEED, (speed_type, speed, -1), f"speed {speed:.2f} m/s (type {speed_type})",
                          cancel=cancel, component=component)
+            self.tel.clear_warning(f"speed{speed_type}")
             return True
         except CommandRejected as exc:
             self.tel.warn(f"speed{speed_type}", f"{exc}: the vehicle flies at its own configured speed")
+            return False
+        except VehicleInControl:
+            raise
+        except LinkTimeout as exc:
+            self.tel.warn(f"speed{speed_type}", f"{exc}: continuing; the measured speed is watched")
             return False
 
     # --- targets ---------------------------------------------------------------------------------
@@ -230,6 +284,7 @@ class Commander:
         mav = mavutil().mavlink
         if not all(math.isfinite(c) for c in world) or (yaw is not None and not math.isfinite(yaw)):
             raise LinkError(f"position target must be finite, got {world} yaw {yaw}")
+        self.check_control("position target")
         sys_id, comp = self.target()
         n, e, d = self.ned.to_ned(world)
         mask = POSITION_ONLY_MASK if yaw is None else POSITION_YAW_MASK
@@ -237,12 +292,17 @@ class Commander:
         self.transport.send("set_position_target_local_ned_send", self._ms(), sys_id,
                             comp if component is None else component, mav.MAV_FRAME_LOCAL_NED, mask,
                             n, e, d, 0, 0, 0, 0, 0, 0, y, 0)
+        if self.controller != "pos":  # GUIDED enters position control: ArduCopter resets the speed
+            self.controller = "pos"
+            self.controller_changes += 1
 
     def send_velocity_target(self, v_world: Vec3, yaw: float | None = None, component: int | None = None) -> None:
         """One SET_POSITION_TARGET_LOCAL_NED with a world velocity [m/s]."""
         mav = mavutil().mavlink
         if not all(math.isfinite(c) for c in v_world) or (yaw is not None and not math.isfinite(yaw)):
             raise LinkError(f"velocity target must be finite, got {v_world} yaw {yaw}")
+        self.check_control("velocity target")
+        self.controller = "vel"
         sys_id, comp = self.target()
         vn, ve, vd = self.ned.velocity_to_ned(v_world)
         mask = VELOCITY_ONLY_MASK if yaw is not None else VELOCITY_ONLY_MASK | (1 << 10)

@@ -79,6 +79,16 @@ class MavlinkConfig:
             SYS_STATUS [Hz] (0 leaves the vehicle's stream rates alone).
         max_range: Largest plausible |local NED coordinate| [m]; beyond is invalid telemetry.
         max_speed: Largest plausible velocity component [m/s].
+        vehicle_max_speed: Fastest the vehicle really moves [m/s]: a position step faster than this
+            between two samples is an estimator jump (hold and pause).
+        brake_decel: The vehicle's braking deceleration [m/s^2]: the stopping distance at speed v is
+            v^2 / (2 brake_decel) (a pause stops within it; so does the end of a segment).
+        overspeed_factor: The vehicle flying faster than the commanded speed x this (+ 0.15 m/s) for
+            0.5 s is overspeed: the speed is sent again, then the vehicle is held.
+        max_loss: Packet loss above which the link is too poor to fly (a readiness reason), in [0, 1].
+        max_rtt: Round-trip time above which the link is too poor to fly [s].
+        signing_key: MAVLink 2 signing passphrase (``--mavlink-key``; SHA-256 gives the 32-byte key, as
+            MAVProxy's ``signing setup``) or 64 hex digits (the key itself); ``None``: unsigned.
     """
 
     ned: NedFrame = field(default_factory=NedFrame)
@@ -112,6 +122,16 @@ class MavlinkConfig:
     message_rate: float = 10.0
     max_range: float = 10_000.0
     max_speed: float = 50.0
+    vehicle_max_speed: float = 15.0
+    brake_decel: float = 2.5
+    overspeed_factor: float = 1.3
+    max_loss: float = 0.2
+    max_rtt: float = 0.5
+    signing_key: str | None = field(default=None, repr=False)
+
+    def stopping_distance(self, speed: float) -> float:
+        """Braking distance from ``speed`` [m/s]: v^2 / (2 ``brake_decel``) [m]."""
+        return speed * speed / (2.0 * self.brake_decel)
 
     def __post_init__(self) -> None:
         modes = copter_modes()
@@ -122,7 +142,8 @@ class MavlinkConfig:
             raise ValueError(f"GroundMotion.mode: unknown ArduPilot Copter mode {self.ground.mode!r}")
         for name in ("heartbeat_timeout", "pose_timeout", "ack_timeout", "command_max_age", "setpoint_rate",
                      "position_tolerance", "altitude_tolerance", "still_speed", "settle_timeout", "ready_timeout",
-                     "fly_speed", "climb_rate", "descent_rate", "state_rate", "max_range", "max_speed"):
+                     "fly_speed", "climb_rate", "descent_rate", "state_rate", "max_range", "max_speed",
+                     "vehicle_max_speed", "brake_decel", "overspeed_factor", "max_rtt"):
             v = getattr(self, name)
             if not (v > 0 and math.isfinite(v)):
                 raise ValueError(f"MavlinkConfig.{name} must be > 0, got {v}")
@@ -130,6 +151,10 @@ class MavlinkConfig:
             v = getattr(self, name)
             if not (v >= 0 and math.isfinite(v)):
                 raise ValueError(f"MavlinkConfig.{name} must be >= 0, got {v}")
+        if not (0.0 <= self.max_loss <= 1.0):
+            raise ValueError(f"MavlinkConfig.max_loss must be in [0, 1], got {self.max_loss}")
+        if self.signing_key is not None and not str(self.signing_key).strip():
+            raise ValueError("MavlinkConfig.signing_key: must not be empty (leave it unset for no signing)")
         if self.retries < 0:
             raise ValueError(f"MavlinkConfig.retries must be >= 0, got {self.retries}")
 

@@ -18,6 +18,7 @@ from planner.mission import SegmentKind
 
 from console.link.base import Mode, RobotState
 from console.link.mavlink_config import MavlinkConfig
+from console.link.mavlink_quality import QualityFigures
 from console.link.mavlink_telemetry import (LANDED_LANDING, LANDED_ON_GROUND, LANDED_TAKEOFF, LANDED_UNDEFINED,
                                 STATUSTEXT_IN_STATE, Telemetry, Vehicle)
 
@@ -42,6 +43,10 @@ def make_state(tel: Telemetry, cfg: MavlinkConfig, running: SegmentKind | None,
     ``running`` is the kind of the segment being executed, if any."""
     ned = cfg.ned
     readiness = tel.readiness(cfg.pose_timeout)
+    q = tel.quality.figures()
+    poor = link_too_poor(q, cfg)
+    if poor:
+        readiness = "; ".join(x for x in (readiness, poor) if x)
     now = time.monotonic()
     with tel.lock:
         v = tel.v
@@ -62,6 +67,11 @@ def make_state(tel: Telemetry, cfg: MavlinkConfig, running: SegmentKind | None,
         invalid_total = sum(v.invalid.values())
         warnings = tuple(v.warnings.values())
         epoch = v.epoch
+        control = tel.authority.describe()
+        est = tel.estimator
+        jump_recent = now - est.jump_time < 10.0
+        estimator = "; ".join(x for x in (est.jump if jump_recent else "", est.fault) if x)
+        resets, jump_m = est.resets, est.jump_m if jump_recent else 0.0
     hb_ok = age <= cfg.heartbeat_timeout
     known = math.isfinite(pose_age)
     fresh = known and pose_age <= cfg.pose_timeout
@@ -91,6 +101,8 @@ def make_state(tel: Telemetry, cfg: MavlinkConfig, running: SegmentKind | None,
         health = f"invalid telemetry dropped: {why_invalid}"
     elif status >= 5:
         health = "autopilot failsafe (system status CRITICAL/EMERGENCY)"
+    elif estimator:
+        health = f"estimator not trusted: {estimator}"
     else:
         health = "ok"
     return RobotState(time=time.time(), position=pos, yaw=yaw, velocity=vel, mode=mode, armed=armed,
@@ -98,7 +110,18 @@ def make_state(tel: Telemetry, cfg: MavlinkConfig, running: SegmentKind | None,
                       link_ok=hb_ok and (fresh or not known), link_age=age if math.isfinite(age) else 1e9,
                       health=health, autopilot_mode=mode_name, messages=messages, position_valid=fresh,
                       pose_age=pose_age, ready=not readiness, readiness=readiness, warnings=warnings,
-                      link_epoch=epoch)
+                      link_epoch=epoch, link_quality=q.summary(), link_loss=q.loss, link_rtt=q.rtt,
+                      vehicle_control=control, estimator=estimator, estimator_resets=resets, position_jump=jump_m)
 
 
-__all__ = ["make_state", "landed"]
+def link_too_poor(q: QualityFigures, cfg: MavlinkConfig) -> str:
+    """Why the link is too poor to fly (``""`` when good enough): loss or latency over the limits."""
+    why = []
+    if q.loss is not None and q.loss > cfg.max_loss:
+        why.append(f"{100 * q.loss:.0f} % of packets lost (limit {100 * cfg.max_loss:.0f} %)")
+    if q.rtt is not None and q.rtt > cfg.max_rtt:
+        why.append(f"round trip {q.rtt * 1000:.0f} ms (limit {cfg.max_rtt * 1000:.0f} ms)")
+    return ("link too poor to fly: " + ", ".join(why)) if why else ""
+
+
+__all__ = ["make_state", "landed", "link_too_poor"]

@@ -13,9 +13,17 @@ and keeps the latest *valid* vehicle state in the vehicle's local NED frame [m, 
   an invalid value never becomes the robot's pose;
 - **ages**: the time of the last message of each stream (valid or not) and of the last valid
   position, so a stream that stopped (without a heartbeat gap) shows as stale;
-- **reboot / reconnect**: ``time_boot_ms`` going back, or a heartbeat after a silence longer
-  than the heartbeat timeout, increments ``epoch`` and records why; the EKF origin
-  (GPS_GLOBAL_ORIGIN) is kept and a moved origin is warned about.
+- **duplicates, reordering, loss**: every packet goes through
+  :class:`~console.link.mavlink_quality.LinkQuality` first (exact copies dropped, loss from ``seq``
+  gaps, TIMESYNC latency, rates); a position sample older than the one held is dropped (reordered);
+- **reboot / reconnect** needs agreeing evidence: a heartbeat after a silence longer than the
+  heartbeat timeout, or ``time_boot_ms`` going back *and* (a silence that just ended, or
+  ``REBOOT_SAMPLES`` samples in a row on the new, earlier clock): a late copy alone is never a reboot.
+  It increments ``epoch`` and records why; the EKF origin (GPS_GLOBAL_ORIGIN) is kept and a moved
+  origin is warned about;
+- **mode authority and estimator trust**: :class:`~console.link.mavlink_authority.ModeAuthority` sees
+  every heartbeat's mode, :class:`~console.link.mavlink_authority.EstimatorWatch` every position and
+  EKF_STATUS_REPORT / ESTIMATOR_STATUS.
 """
 
 from __future__ import annotations
@@ -26,6 +34,9 @@ import threading
 import time
 from dataclasses import dataclass, field
 from typing import Any, Callable
+
+from console.link.mavlink_authority import EstimatorWatch, ModeAuthority
+from console.link.mavlink_quality import LinkQuality
 
 log = logging.getLogger(__name__)
 
@@ -47,6 +58,8 @@ MAV_AUTOPILOT_INVALID = 8
 MAV_SYS_STATUS_PREARM_CHECK = 1 << 28
 EKF_POS_HORIZ_REL, EKF_POS_HORIZ_ABS, EKF_POS_VERT_ABS = 8, 16, 32
 EKF_CONST_POS_MODE = 128
+REBOOT_SAMPLES = 5
+"""Samples in a row on an earlier ``time_boot_ms`` clock (without a silence) that make a reboot."""
 TRACKED = ("LOCAL_POSITION_NED", "ATTITUDE", "EXTENDED_SYS_STATE", "SYS_STATUS")
 """Streams the link needs, re-requested while they do not flow."""
 
@@ -105,10 +118,15 @@ class Vehicle:
     sensors_present: int | None = None
     ekf_flags: int | None = None
     last_boot_ms: int | None = None
+    pos_boot_ms: int | None = None  # time_boot_ms of the position held
+    low_boot_ms: int | None = None  # a candidate earlier clock (reboot or late copies)
+    low_count: int = 0
+    silence_end: float = -math.inf  # monotonic [s] a heartbeat silence ended
     origin: tuple[float, float, float] | None = None  # first GPS_GLOBAL_ORIGIN (lat deg, lon deg, alt m)
     origin_now: tuple[float, float, float] | None = None
     stream_time: dict[str, float] = field(default_factory=dict)  # message type -> monotonic [s]
     invalid: dict[str, int] = field(default_factory=dict)  # message type -> count dropped
+    late_dropped: int = 0  # position / attitude samples older than the ones held (reordered, late copies)
     last_invalid: tuple[float, str] | None = None  # (monotonic [s], reason)
     statustext: list[StatusLine] = field(default_factory=list)
     statustext_count: int = 0
@@ -147,6 +165,11 @@ class Telemetry:
         self.v = Vehicle()
         self.acks: dict[int, tuple[Any, float]] = {}  # command -> (COMMAND_ACK, monotonic [s])
         self.received = 0
+        self.quality = LinkQuality()
+        self.timesync_sent: dict[int, float] = {}  # our TIMESYNC ts1 [ns] -> monotonic [s] sent
+        self.authority = ModeAuthority(lambda: [(s.time, s.severity, s.text) for s in self.v.statustext])
+        self.estimator = EstimatorWatch(max_speed)
+        self.signing_key_set = False
 
     # --- identity --------------------------------------------------------------------------------
     def _is_autopilot(self, msg: Any) -> bool:
@@ -198,8 +221,14 @@ class Telemetry:
         reason = None
         if v.last_heartbeat > -math.inf and now - v.last_heartbeat > self.heartbeat_timeout:
             reason = f"heartbeat back after {now - v.last_heartbeat:.1f} s of silence"
+            v.silence_end = now
         v.last_heartbeat = now
         v.custom_mode = int(msg.custom_mode)
+        from console.link.mavlink_transport import mavutil
+        name = mavutil().mode_mapping_acm.get(v.custom_mode, f"mode {v.custom_mode}")
+        if self.authority.observe(name) is not None:
+            self._add_line(4, f"WARNING: link: the vehicle switched to {name} by itself: the console "
+                              "sends nothing until the operator takes control")
         v.base_mode = int(msg.base_mode)
         v.system_status = int(msg.system_status)
         return reason
@@ -214,6 +243,12 @@ class Telemetry:
         epoch_reason = None
         with self.lock:
             v = self.v
+            if not self.quality.accept(msg, (v.system, v.component) if v.system is not None else None):
+                return  # an exact copy (a second link, a retransmission): already handled
+            if self.quality.signed and not self.signing_key_set and "signing" not in v.warnings:
+                v.warnings["signing"] = ("the vehicle signs its messages (MAVLink 2 signing): it ignores unsigned "
+                                         "commands; signing required: set a key with --mavlink-key")
+                self._add_line(4, "WARNING: link: " + v.warnings["signing"])
             if kind == "HEARTBEAT":
                 epoch_reason = self._heartbeat(msg, now)
             elif v.system is not None and msg.get_srcSystem() == v.system:
@@ -232,6 +267,11 @@ class Telemetry:
 
     def _epoch(self, reason: str) -> None:
         v = self.v
+        if reason.startswith("rebooted"):
+            self.authority.release()  # a rebooted vehicle is in its own mode: the console claims nothing
+        self.estimator.forget()
+        self.quality.reset_sequence()
+        v.low_boot_ms, v.low_count, v.pos_boot_ms = None, 0, None
         v.epoch += 1
         v.epoch_reason = reason
         v.warnings["epoch"] = (f"vehicle {reason} (#{v.epoch}): telemetry and EKF origin requested again; "
@@ -253,8 +293,27 @@ class Telemetry:
         boot = getattr(msg, "time_boot_ms", None)
         if isinstance(boot, int) and kind in ("LOCAL_POSITION_NED", "ATTITUDE"):
             if v.last_boot_ms is not None and boot + 1000 < v.last_boot_ms:
-                epoch = f"rebooted (time_boot_ms went back from {v.last_boot_ms / 1000:.1f} s to {boot / 1000:.1f} s)"
-            v.last_boot_ms = boot
+                # an earlier clock: late copies, or a reboot; a reboot needs agreeing evidence
+                if v.low_boot_ms is not None and boot >= v.low_boot_ms:
+                    v.low_count += 1
+                else:
+                    v.low_count = 1
+                v.low_boot_ms = boot
+                if now - v.silence_end < 5.0 or v.low_count >= REBOOT_SAMPLES:
+                    epoch = (f"rebooted (time_boot_ms went back from {v.last_boot_ms / 1000:.1f} s to "
+                             f"{boot / 1000:.1f} s)")
+                    v.last_boot_ms = boot
+                    v.low_boot_ms, v.low_count, v.pos_boot_ms = None, 0, None
+                else:
+                    v.late_dropped += 1
+                    return None  # not used: it may be a late copy of the past
+            else:
+                v.low_boot_ms, v.low_count = None, 0
+                v.last_boot_ms = max(boot, v.last_boot_ms or 0) if epoch is None else boot
+        if kind == "LOCAL_POSITION_NED" and isinstance(boot, int) and v.pos_boot_ms is not None \
+                and boot < v.pos_boot_ms and epoch is None:
+            v.late_dropped += 1  # reordered: older than the position held
+            return None
         if kind == "LOCAL_POSITION_NED":
             bad = (_check(kind, {"x": msg.x, "y": msg.y, "z": msg.z}, self.max_range)
                    or _check(kind, {"vx": msg.vx, "vy": msg.vy, "vz": msg.vz}, self.max_speed))
@@ -264,6 +323,11 @@ class Telemetry:
                 v.pos_ned = (float(msg.x), float(msg.y), float(msg.z))
                 v.vel_ned = (float(msg.vx), float(msg.vy), float(msg.vz))
                 v.pos_time = now
+                if isinstance(boot, int):
+                    v.pos_boot_ms = boot
+                jump = self.estimator.position(v.pos_ned, boot / 1000.0 if isinstance(boot, int) else now)
+                if jump:
+                    self._add_line(4, f"WARNING: link: {jump}")
         elif kind == "ATTITUDE":
             bad = _check(kind, {"yaw": msg.yaw}, 2 * math.pi + 0.01)
             if bad:
@@ -286,6 +350,17 @@ class Telemetry:
                 v.sensors_present = int(msg.onboard_control_sensors_present)
         elif kind == "EKF_STATUS_REPORT":
             v.ekf_flags = int(msg.flags)
+            fault = self.estimator.ekf_fault(v.ekf_flags, {
+                "velocity": float(msg.velocity_variance), "position": float(msg.pos_horiz_variance),
+                "height": float(msg.pos_vert_variance), "compass": float(msg.compass_variance)})
+            self._estimator_flags(fault)
+        elif kind == "ESTIMATOR_STATUS":
+            fault = self.estimator.estimator_fault(int(msg.flags), {
+                "velocity": float(msg.vel_ratio), "position": float(msg.pos_horiz_ratio),
+                "height": float(msg.pos_vert_ratio), "compass": float(msg.mag_ratio)})
+            self._estimator_flags(fault)
+        elif kind == "TIMESYNC":
+            self.quality.timesync(msg, self.timesync_sent)
         elif kind == "COMMAND_ACK":
             self.acks[int(msg.command)] = (msg, now)
         elif kind == "PARAM_VALUE":
@@ -299,6 +374,13 @@ class Telemetry:
             else:
                 self._origin((lat, lon, alt))
         return epoch
+
+    def _estimator_flags(self, fault: str) -> None:
+        if self.v.pos_ned is None and not self.v.armed:
+            fault = ""  # before the first position (EKF starting up): readiness says it
+        new = self.estimator.flags(fault)
+        if new:
+            self._add_line(4, f"WARNING: link: estimator fault: {new}")
 
     def _origin(self, origin: tuple[float, float, float]) -> None:
         v = self.v

@@ -18,6 +18,7 @@ Connection strings are pymavlink's: ``udpin:0.0.0.0:14550`` (listen; what ArduPi
 
 from __future__ import annotations
 
+import hashlib
 import logging
 import math
 import re
@@ -96,8 +97,34 @@ def tlog_path(tlog: str | Path) -> Path:
     return p / time.strftime("mavlink-%Y%m%d-%H%M%S.tlog")
 
 
+def signing_secret(key: str) -> bytes:
+    """The 32-byte MAVLink 2 signing key: 64 hex digits as they are, else SHA-256 of the passphrase
+    (as MAVProxy's ``signing setup PASSPHRASE``)."""
+    text = key.strip()
+    if re.fullmatch(r"[0-9a-fA-F]{64}", text):
+        return bytes.fromhex(text)
+    return hashlib.sha256(text.encode()).digest()
+
+
+def use_mavlink2() -> None:
+    """Switch pymavlink to MAVLink 2 before a connection opens (signing needs it; a connection that
+    switched by itself on the first MAVLink 2 packet would lose its signing set-up)."""
+    import os
+
+    if os.environ.get("MAVLINK20") != "1":
+        os.environ["MAVLINK20"] = "1"
+        mavutil().set_dialect("ardupilotmega")
+
+
 class MavTransport:
     """The pymavlink connection with its receive and GCS-heartbeat threads.
+
+    On a stream transport (TCP) nothing but our heartbeat is written while the vehicle has been silent
+    longer than ``gate_after``: what is written into a blocked TCP connection waits there and reaches
+    the vehicle late (seconds to minutes), so such a send raises :class:`LinkError` instead. With a
+    ``signing_key`` every message is signed (MAVLink 2); unsigned or wrongly signed messages from the
+    vehicle are still read (and counted: ``bad_signatures``). Once a second the heartbeat thread also
+    sends a TIMESYNC request (the vehicle's answer gives the round-trip time).
 
     Args:
         url: pymavlink connection string.
@@ -107,8 +134,15 @@ class MavTransport:
     """
 
     def __init__(self, url: str, source_system: int, source_component: int, on_message: Callable[[Any], None],
-                 tlog: str | Path | None = None, on_reconnect: Callable[[str], None] | None = None) -> None:
+                 tlog: str | Path | None = None, on_reconnect: Callable[[str], None] | None = None,
+                 silence: Callable[[], float] | None = None, gate_after: float = math.inf,
+                 signing_key: str | None = None, on_timesync: Callable[[int], None] | None = None) -> None:
         self.url = url
+        self.silence, self.gate_after = silence, gate_after
+        self.signing_key = signing_key
+        self.on_timesync = on_timesync
+        self.stream = url.strip().startswith(("tcp:", "tcpin:"))
+        self.gated = 0  # sends refused on a silent stream transport
         self.device, self.baud = parse_connection(url)
         self.source_system, self.source_component = source_system, source_component
         self.on_message = on_message
@@ -122,6 +156,12 @@ class MavTransport:
         self._threads: list[threading.Thread] = []
         self.sent = 0
         self._log_received = False
+
+    @property
+    def bad_signatures(self) -> int:
+        """Messages whose signature did not match our key."""
+        conn = self.conn
+        return int(getattr(getattr(getattr(conn, "mav", None), "signing", None), "badsig_count", 0) or 0)
 
     @property
     def is_open(self) -> bool:
@@ -142,12 +182,17 @@ class MavTransport:
                                   "autoreconnect": True}
         if self.baud is not None:
             kwargs["baud"] = self.baud
+        if self.signing_key is not None:
+            use_mavlink2()
         try:
             self.conn = mavutil().mavlink_connection(self.device, **kwargs)
         except ImportError as exc:  # pymavlink imports pyserial only for serial devices
             raise LinkError(f"serial MAVLink connections need pyserial (pip install pyserial): {exc}") from None
         except (OSError, ValueError) as exc:
             raise LinkError(f"cannot open MAVLink connection {self.url!r}: {exc}") from None
+        if self.signing_key is not None:
+            self.conn.setup_signing(signing_secret(self.signing_key), sign_outgoing=True,
+                                    allow_unsigned_callback=lambda _mav, _msg_id: True)
         if self.tlog_request is not None:
             try:
                 self.tlog = tlog_path(self.tlog_request)
@@ -198,6 +243,12 @@ class MavTransport:
         conn = self.conn
         if conn is None:
             raise LinkError("MAVLink link is not open")
+        if self.stream and fn_name != "heartbeat_send" and self.silence is not None:
+            quiet = self.silence()
+            if quiet > self.gate_after:
+                self.gated += 1
+                raise LinkError(f"not sent: the vehicle has been silent for {quiet:.1f} s on {self.url}; on TCP the "
+                                "message would wait in the connection and reach the vehicle late")
         with self._send_lock:
             try:
                 getattr(conn.mav, fn_name)(*args)
@@ -217,7 +268,11 @@ class MavTransport:
                 return
             try:
                 self.send("heartbeat_send", mav.MAV_TYPE_GCS, mav.MAV_AUTOPILOT_INVALID, 0, 0, mav.MAV_STATE_ACTIVE)
-            except Exception as exc:  # a closed socket while shutting down
+                if self.on_timesync is not None:
+                    ts1 = time.monotonic_ns()
+                    self.on_timesync(ts1)
+                    self.send("timesync_send", 0, ts1)
+            except Exception as exc:  # a closed socket while shutting down, a gated TCP link
                 log.debug("heartbeat not sent: %s", exc)
 
     def _rx_loop(self) -> None:

@@ -1,0 +1,147 @@
+"""Mode authority: the vehicle's own mode changes (battery / GCS failsafe RTL or LAND, a fence's BRAKE,
+a second ground station, the pilot's switch) end the console's control at once: no more targets, no
+mode command, the mission paused naming the mode and the vehicle's reason; resume only after the
+operator takes control; the console's LAND checks the mode first; flight above the workspace is warned."""
+
+from __future__ import annotations
+
+import time
+
+import pytest
+from pymavlink import mavutil
+
+from console.link.base import LinkError, RunStatus
+from console.link.manager import MissionStateError, MissionStatus
+from mav_helpers import config, eventually, events, mission_manager, vehicle
+from planner.mission import Mission, MissionSegment, SegmentKind
+
+mav = mavutil.mavlink
+TAKEOFF, FLY, LAND = SegmentKind.TAKEOFF, SegmentKind.FLY, SegmentKind.LAND
+BOUNDS = dict(bounds_min=(0.0, 0.0, 0.0), bounds_max=(10.0, 12.0, 3.0))
+
+
+def _airborne(link, height: float = 1.5) -> None:
+    run = link.run_segment(MissionSegment(TAKEOFF, ((2.5, 0.7, 0.0), (2.5, 0.7, height))))
+    assert run.wait(60.0) is RunStatus.DONE, run.error
+
+
+def _flight(y: float = 9.0) -> Mission:
+    return Mission((MissionSegment(FLY, ((2.5, 0.7, 1.5), (2.5, y, 1.5))),), **BOUNDS)
+
+
+def _console_commands_after(emu, t0: float) -> tuple[int, list[str]]:
+    """Position targets and console mode changes the vehicle handled after ``t0`` (monotonic [s])."""
+    targets = sum(1 for t in emu.record.target_times if t > t0)
+    modes = [m for (m, t), (_, by) in zip(emu.record.mode_times, emu.record.mode_sources) if t > t0 and by == "gcs"]
+    return targets, modes
+
+
+def test_a_battery_failsafe_rtl_pauses_the_mission_naming_mode_and_reason_and_the_climb_is_warned() -> None:
+    with vehicle(config(fly_speed=1.0), fly_speed=2.0, accel=3.0, brake_decel=3.0) as (link, emu):
+        emu.params["RTL_ALT"] = 600.0  # 6 m, in a 3 m high workspace
+        _airborne(link)
+        manager = mission_manager(link, failsafe_after=1.5, failsafe_hold=0.5)
+        manager.start(_flight())
+        assert eventually(lambda: emu.pos[0] > 1.0)
+        emu.battery_failsafe("RTL")
+        took = time.monotonic()
+        assert manager.wait(30.0) is MissionStatus.PAUSED, events(manager)
+        paused_after = time.monotonic() - took
+        message = manager.progress().message
+        assert "vehicle took control: mode RTL (Battery 1 is low 10.40V used 4200 mAh)" in message, message
+        assert link.latest_state().vehicle_control.startswith("vehicle took control: mode RTL")
+        # the vehicle flies its RTL: climbs to RTL_ALT above the workspace, warned
+        assert eventually(lambda: any("outside the workspace (autopilot mode RTL)" in m for m in events(manager)),
+                          30.0), events(manager)
+        assert eventually(lambda: emu.record.max_height > 5.9, 30.0)
+        time.sleep(1.0)
+        targets, modes = _console_commands_after(emu, took + 0.5)  # what was in flight when it switched
+        print(f"paused {paused_after:.2f} s after the RTL; targets after: {targets}; console modes after: {modes}")
+        assert targets == 0 and modes == [], (targets, modes)
+        # resume is refused until the operator takes control; pause / abort send nothing
+        with pytest.raises(MissionStateError, match="take control first"):
+            manager.resume()
+        question = manager.take_control()
+        assert question.startswith("vehicle took control: mode RTL") and "Take control?" in question, question
+        assert link.latest_state().vehicle_control  # asking is not taking
+        _, modes = _console_commands_after(emu, took)
+        assert modes == [] and emu.mode == "RTL"
+        manager.take_control(confirm=True)
+        manager.resume()  # from 6 m up, outside the workspace: the geofence refuses before any command
+        assert manager.wait(30.0) is MissionStatus.PAUSED
+        assert "outside the geofence" in manager.progress().message, events(manager)
+        _, modes = _console_commands_after(emu, took)
+        assert modes == [], modes
+
+
+def test_after_taking_control_resume_switches_back_to_guided_and_completes() -> None:
+    with vehicle(config(fly_speed=1.0), fly_speed=2.0, accel=3.0, brake_decel=3.0, descent_rate=0.3) as (link, emu):
+        _airborne(link)
+        manager = mission_manager(link, failsafe_after=1.5, failsafe_hold=0.5)
+        manager.start(_flight(4.0))
+        assert eventually(lambda: emu.pos[0] > 1.0)
+        emu.battery_failsafe("LAND")
+        assert manager.wait(30.0) is MissionStatus.PAUSED, events(manager)
+        assert "vehicle took control: mode LAND (Battery 1 is low" in manager.progress().message
+        with pytest.raises(MissionStateError, match="take control first"):
+            manager.resume()
+        assert emu.mode == "LAND"
+        assert manager.take_control(confirm=True).startswith("control taken")
+        manager.resume()
+        assert eventually(lambda: emu.mode == "GUIDED", 20.0)  # only now the console switches back
+        assert manager.wait(90.0) is MissionStatus.DONE, events(manager)
+
+
+@pytest.mark.parametrize("change, mode, reason", [
+    (lambda emu: emu.battery_failsafe("LAND"), "LAND", "Battery 1 is low"),
+    (lambda emu: emu.gcs_failsafe(), "RTL", "GCS Failsafe"),
+    (lambda emu: emu.fence_breach(), "BRAKE", "Fence Breached"),
+    (lambda emu: emu.other_gcs_set_mode("LAND"), "LAND", "no reason given"),
+    (lambda emu: emu.other_gcs_set_mode("LOITER"), "LOITER", "no reason given"),
+    (lambda emu: emu.other_gcs_set_mode("SMART_RTL"), "SMART_RTL", "no reason given"),
+])
+def test_every_mode_the_vehicle_chooses_ends_the_consoles_control(change, mode, reason) -> None:
+    with vehicle(config(fly_speed=1.0), fly_speed=2.0, accel=3.0, brake_decel=3.0) as (link, emu):
+        _airborne(link)
+        manager = mission_manager(link, failsafe_after=1.5, failsafe_hold=0.5)
+        manager.start(_flight())
+        assert eventually(lambda: emu.pos[0] > 1.0)
+        change(emu)
+        took = time.monotonic()
+        assert manager.wait(30.0) is MissionStatus.PAUSED, events(manager)
+        assert f"vehicle took control: mode {mode} ({reason}" in manager.progress().message, manager.progress().message
+        time.sleep(1.0)
+        targets, modes = _console_commands_after(emu, took + 0.5)
+        assert targets == 0 and modes == [] and emu.mode == mode, (targets, modes, emu.mode)
+
+
+def test_the_consoles_land_checks_the_mode_first() -> None:
+    """An RTL that starts while the vehicle hovers over the landing spot is not replaced by a LAND."""
+    with vehicle(config(fly_speed=1.0)) as (link, emu):
+        _airborne(link)
+        link.hold()  # BRAKE: the console's own mode
+        emu.other_gcs_set_mode("RTL")
+        assert eventually(lambda: link.vehicle_control.startswith("vehicle took control: mode RTL"))
+        with pytest.raises(LinkError, match="vehicle took control: mode RTL"):
+            link.run_segment(MissionSegment(LAND, ((2.5, 0.7, 1.5), (2.5, 0.7, 0.0))))
+        with pytest.raises(LinkError, match="vehicle took control: mode RTL"):
+            link.land_here()
+        link.hold()  # sends nothing
+        time.sleep(0.5)
+        assert "LAND" not in emu.record.modes and emu.record.modes[-1] == "RTL", emu.record.modes
+
+
+def test_the_consoles_own_mode_changes_are_not_a_takeover() -> None:
+    """Neighbour: hold (BRAKE), resume (GUIDED), land (LAND): the console's modes never read as the vehicle's."""
+    with vehicle(config(fly_speed=2.0)) as (link, emu):
+        manager = mission_manager(link, failsafe_after=1.5, failsafe_hold=0.5)
+        manager.start(Mission((MissionSegment(TAKEOFF, ((2.5, 0.7, 0.0), (2.5, 0.7, 1.5))),
+                               MissionSegment(FLY, ((2.5, 0.7, 1.5), (2.5, 6.0, 1.5))),
+                               MissionSegment(LAND, ((2.5, 6.0, 1.5), (2.5, 6.0, 0.0)))), **BOUNDS))
+        assert eventually(lambda: emu.pos[0] > 1.0, 60.0)
+        manager.pause()
+        assert manager.wait(30.0) is MissionStatus.PAUSED
+        manager.resume()
+        assert manager.wait(90.0) is MissionStatus.DONE, events(manager)
+        assert not any("took control" in m for m in events(manager)), events(manager)
+        assert link.latest_state().vehicle_control == ""
