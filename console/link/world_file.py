@@ -31,8 +31,7 @@ from pathlib import Path
 from typing import Any
 
 from pipeline.camera.geometry import Pose
-from pipeline.scene import Scene, SceneError, load_scene
-from pipeline.scene_json import scene_from_dict
+from pipeline.scene import Scene, SceneError, scene_from_dict, scene_from_json
 from planner.grid import Workspace
 
 from console.link.sim_config import SimConfig
@@ -156,7 +155,11 @@ def _scene(raw: Any, base: Path | None) -> Scene:
         if not path.is_absolute() and base is not None:
             path = base / path
         try:
-            return load_scene(path)
+            return scene_from_json(path.read_text(encoding="utf-8"))
+        except FileNotFoundError:
+            raise WorldError(f"scene: {path}: no such scene file") from None
+        except (OSError, UnicodeDecodeError) as exc:
+            raise WorldError(f"scene: {path}: cannot read it: {exc}") from None
         except SceneError as exc:
             raise WorldError(f"scene: {path}: {exc}") from None
     if isinstance(raw, dict):
