@@ -238,7 +238,9 @@ class AgentDoor:
         return read.mission_json(self.session)
 
     def _op_scene_json(self, args: Mapping[str, Any]) -> dict[str, Any]:
-        return self.session.scene.to_dict()
+        from pipeline.scene import scene_to_dict
+
+        return scene_to_dict(self.session.scene)
 
     def _op_last_photo(self, args: Mapping[str, Any]) -> dict[str, Any]:
         got = read.last_photo(self.session)

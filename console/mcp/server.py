@@ -65,13 +65,13 @@ def build_server(bridge: Bridge, allow_actions: bool = False, decision_timeout: 
         return await _call(bridge, op, args)
 
     # --- read ----------------------------------------------------------------------------------------
-    @mcp.tool(annotations=read_only)
+    @mcp.tool(annotations=read_only, structured_output=False)
     async def get_scene_summary() -> str:
         """A short text summary of the mapped room, as seen from the robot: objects, where they stand,
         what is behind what, which can be reached by walking or flying."""
         return str(await call("summary"))
 
-    @mcp.tool(annotations=read_only)
+    @mcp.tool(annotations=read_only, structured_output=False)
     async def get_scene_graph(include_schema: bool = False) -> str:
         """The scene graph as JSON: objects (centre, size [w, h, l], support, direction from the robot,
         visibility, reachability), relations, groups, uncertainties. include_schema adds its JSON schema."""
@@ -80,25 +80,25 @@ def build_server(bridge: Bridge, allow_actions: bool = False, decision_timeout: 
             return _json({"graph": graph, "schema": await call("scene_graph_schema")})
         return _json(graph)
 
-    @mcp.tool(annotations=read_only)
+    @mcp.tool(annotations=read_only, structured_output=False)
     async def list_objects() -> str:
         """Every mapped object as JSON: id, label, score, centre and size [m], yaw [rad], position
         uncertainty (sigma_xy, sigma_ray [m]) and the captures that saw it."""
         return _json(await call("objects"))
 
-    @mcp.tool(annotations=read_only)
+    @mcp.tool(annotations=read_only, structured_output=False)
     async def get_robot_state() -> str:
         """The robot as JSON: position (or why it is unknown), mode, armed, landed, battery (0-1), link
         health, readiness, warnings, latest messages, and which of hold / land / return apply now."""
         return _json(await call("robot_state"))
 
-    @mcp.tool(annotations=read_only)
+    @mcp.tool(annotations=read_only, structured_output=False)
     async def get_mission_state() -> str:
         """The route (start, registered goals, candidate: whether the agent planned it), the built
         mission (segments), its run (state, segment, progress) and the proposals awaiting the operator."""
         return _json(await call("mission_state"))
 
-    @mcp.tool(annotations=read_only)
+    @mcp.tool(annotations=read_only, structured_output=False)
     async def get_last_photo() -> list[Any]:
         """The last photo the robot took (JPEG) and its detections (label, score, box in pixels of
         the full photo, the mapped object it became) with the camera and robot positions."""
@@ -106,26 +106,26 @@ def build_server(bridge: Bridge, allow_actions: bool = False, decision_timeout: 
         jpeg = base64.b64decode(got.pop("jpeg_base64"))
         return [Image(data=jpeg, format="jpeg"), _json(got)]
 
-    @mcp.tool(annotations=read_only)
+    @mcp.tool(annotations=read_only, structured_output=False)
     async def get_recent_events(limit: int = 30) -> str:
         """The console's latest events, oldest first: notices, mapping results, mission progress,
         agent requests and the operator's decisions (limit: 1 to 300 lines)."""
         return "\n".join(await call("recent_events", {"limit": limit})) or "(no events yet)"
 
     # --- safety: always on ------------------------------------------------------------------------------
-    @mcp.tool(annotations=acts)
+    @mcp.tool(annotations=acts, structured_output=False)
     async def hold(why: str = "") -> str:
         """Stop the robot where it is, now. During a mission this pauses it (the operator may resume or
         abort). Always allowed."""
         return str(await call("hold", {"why": why}))
 
-    @mcp.tool(annotations=acts)
+    @mcp.tool(annotations=acts, structured_output=False)
     async def land_here(why: str = "") -> str:
         """Land straight down where the robot hovers (refused above a mapped obstacle, with the reason).
         A mission under way is ended first. Always allowed."""
         return str(await call("land_here", {"why": why}))
 
-    @mcp.tool(annotations=acts)
+    @mcp.tool(annotations=acts, structured_output=False)
     async def return_to_launch(why: str = "") -> str:
         """Go back to the launch spot (where the robot last stood disarmed), walking or flying, then land.
         A mission under way is ended first. Always allowed."""
@@ -161,32 +161,32 @@ def build_server(bridge: Bridge, allow_actions: bool = False, decision_timeout: 
             raise
         return _json({k: p[k] for k in ("id", "kind", "title", "state", "outcome", "note") if k in p})
 
-    @mcp.tool(annotations=acts)
+    @mcp.tool(annotations=acts, structured_output=False)
     async def plan_to_point(x: float, y: float, z: float = 0.0, why: str = "") -> str:
         """Plan a candidate path from the end of the route to the point (x, y, z) [m, world frame, z
         above the floor]. It appears in the console labelled as proposed by the agent; nothing moves."""
         return _json(await call("plan_to_point", {"x": x, "y": y, "z": z, "why": why}))
 
-    @mcp.tool(annotations=acts)
+    @mcp.tool(annotations=acts, structured_output=False)
     async def plan_to_object(object: str, why: str = "") -> str:  # noqa: A002 (the agent's word)
         """Plan a candidate path to the free floor beside an object, named by id or label ("robot dog",
         "robot_dog-1"). It appears in the console labelled as proposed by the agent; nothing moves."""
         return _json(await call("plan_to_object", {"object": object, "why": why}))
 
-    @mcp.tool(annotations=acts)
+    @mcp.tool(annotations=acts, structured_output=False)
     async def propose_mission(why: str, ctx: Context) -> str:
         """Ask the operator to execute the route (the candidate is registered, the mission built and
         shown in the console). Returns when the operator approves (the mission starts) or rejects it,
         with the outcome. why: your reason, shown to the operator."""
         return await decided(await call("propose_mission", {"why": why}), ctx)
 
-    @mcp.tool(annotations=acts)
+    @mcp.tool(annotations=acts, structured_output=False)
     async def propose_capture_and_map(why: str, ctx: Context) -> str:
         """Ask the operator to take a photo from where the robot is and map it. Returns once decided
         (and, if approved, once the map is updated), with the outcome."""
         return await decided(await call("propose_capture_and_map", {"why": why}), ctx)
 
-    @mcp.tool(annotations=read_only)
+    @mcp.tool(annotations=read_only, structured_output=False)
     async def wait_for_decision(proposal_id: str, ctx: Context) -> str:
         """Keep waiting for the operator's decision on a proposal that was still pending."""
         return await decided({"id": proposal_id, "final": False}, ctx)
