@@ -33,7 +33,7 @@ import math
 import threading
 import time
 from collections import deque
-from typing import Any, Callable, Mapping
+from typing import Any, Mapping
 
 from console.mcp import state_read as read
 from console.mcp.proposals import Proposal, ProposalError, ProposalQueue
@@ -52,7 +52,8 @@ EVENTS_KEPT = 300
 READ_OPS = ("summary", "scene_graph", "scene_graph_schema", "objects", "robot_state", "mission_state", "mission_json",
             "scene_json", "last_photo", "recent_events", "proposals", "wait_proposal", "status")
 SAFE_OPS = ("hold", "land_here", "return_to_launch")
-PROPOSAL_OPS = ("plan_to_point", "plan_to_object", "propose_capture_and_map", "propose_mission", "withdraw_proposal")
+PROPOSAL_OPS = ("plan_to_point", "plan_to_object", "propose_capture_and_map", "propose_look_around", "propose_mission",
+                "withdraw_proposal")
 
 
 class AgentError(ValueError):
@@ -105,17 +106,20 @@ class AgentDoor:
         commands: The console's vehicle commands (Hold, Land here, Return), or ``None``.
         runner: The mission runner (pause, abort, execute), or ``None``.
         mapping: The capture-and-map job (``start()``, ``running``), or ``None``.
+        look: The Look around job (``look_around()``, ``running``, ``pause()``), or ``None``.
         robot_spec: The console's ``--robot`` (a real vehicle link turns proposals off unless ``real_vehicle``).
         real_vehicle: The console was started with ``--agent-real-vehicle``.
         queue: The approval queue (a new one by default).
     """
 
     def __init__(self, session: Any, commands: Any = None, runner: Any = None, mapping: Any = None,
-                 robot_spec: str = "sim", real_vehicle: bool = False, queue: ProposalQueue | None = None) -> None:
+                 robot_spec: str = "sim", real_vehicle: bool = False, queue: ProposalQueue | None = None,
+                 look: Any = None) -> None:
         self.session = session
         self.commands = commands
         self.runner = runner
         self.mapping = mapping
+        self.look = look
         self.robot_spec = robot_spec
         self.real_vehicle = bool(real_vehicle)
         self.queue = queue if queue is not None else ProposalQueue()
@@ -264,11 +268,12 @@ class AgentDoor:
         timeout = min(WAIT_MAX, max(0.0, _number(args, "timeout", WAIT_MAX)))
         p = self.queue.wait(pid, timeout)
         final = p.decided
-        if final and p.kind == "capture" and p.state == "approved" and self.mapping is not None:
-            end = time.monotonic() + timeout  # the capture's outcome is the map it made
-            while getattr(self.mapping, "running", False) and time.monotonic() < end:
+        job = {"capture": self.mapping, "look": self.look}.get(p.kind)
+        if final and p.state == "approved" and job is not None:
+            end = time.monotonic() + timeout  # the outcome of a capture or a look is the map it made
+            while getattr(job, "running", False) and time.monotonic() < end:
                 time.sleep(0.1)
-            final = not getattr(self.mapping, "running", False)
+            final = not getattr(job, "running", False)
             if final:
                 job = self.session.job
                 p_out = p.outcome + (f"; mapping: {job.error or job.message}" if job.name else "")
@@ -282,6 +287,9 @@ class AgentDoor:
         if run.state == "running" and self.runner is not None:
             self.runner.pause()  # the mission manager holds the robot
             msg = "the mission is paused: the robot holds where it is (the operator may Resume or Abort)"
+        elif self.look is not None and self.look.running and not self.look.paused:
+            self.look.pause()  # a turn under way stops; the look waits
+            msg = "the look around is paused: the robot holds where it is (the operator may Resume or Stop)"
         else:
             msg = self._command("hold")
         self.session.notify("Agent: Hold", msg + (f". Why: {why}" if why else ""), "warning")
@@ -370,6 +378,21 @@ class AgentDoor:
         p = self.queue.propose("capture", "Capture & map: take a photo from where the robot is and map it", why, act)
         return p.to_dict()
 
+    def _op_propose_look_around(self, args: Mapping[str, Any]) -> dict[str, Any]:
+        from console.session.look import DEFAULT_HEADINGS
+
+        why = _text(args, "why", WHY_MAX, required=True)
+        if self.look is None:
+            raise AgentError("this console has no Look around (no robot link that turns)")
+
+        def act() -> str:
+            self.look.look_around()
+            return f"look around started: {DEFAULT_HEADINGS} headings, a capture and map at each"
+
+        p = self.queue.propose("look", f"Look around: turn in place through {DEFAULT_HEADINGS} headings, capturing and "
+                               "mapping at each", why, act)
+        return p.to_dict()
+
     def _op_propose_mission(self, args: Mapping[str, Any]) -> dict[str, Any]:
         from console.views.mission_view import built_text, segment_table
 
@@ -414,7 +437,5 @@ def _brief(args: Mapping[str, Any]) -> dict[str, Any]:
 def _brief_text(args: Mapping[str, Any]) -> str:
     return ", ".join(f"{k}={v!r}" for k, v in _brief(args).items())[:400]
 
-
-Door = Callable[[str, Mapping[str, Any], bool], Any]
 
 __all__ = ["AgentDoor", "AgentError", "PROPOSAL_OPS", "READ_OPS", "SAFE_OPS", "link_is_real"]

@@ -9,7 +9,7 @@ Tools (world frame, z up, metres):
   ``get_mission_state``, ``get_last_photo``, ``get_recent_events``;
 - safety, always on (they make things safer): ``hold``, ``land_here``, ``return_to_launch``;
 - proposals, only with ``--allow-actions``: ``plan_to_point``, ``plan_to_object`` (a candidate path
-  labelled as the agent's in the console; nothing moves), ``propose_capture_and_map``,
+  labelled as the agent's in the console; nothing moves), ``propose_capture_and_map``, ``propose_look_around``,
   ``propose_mission`` (they return once the operator approves or rejects in the console, with the
   outcome) and ``wait_for_decision``.
 
@@ -185,6 +185,12 @@ def build_server(bridge: Bridge, allow_actions: bool = False, decision_timeout: 
         """Ask the operator to take a photo from where the robot is and map it. Returns once decided
         (and, if approved, once the map is updated), with the outcome."""
         return await decided(await call("propose_capture_and_map", {"why": why}), ctx)
+
+    @mcp.tool(annotations=acts, structured_output=False)
+    async def propose_look_around(why: str, ctx: Context) -> str:
+        """Ask the operator to let the robot turn in place through 6 headings, capturing and mapping at
+        each. Returns once decided (and, if approved, once the look has ended), with the outcome."""
+        return await decided(await call("propose_look_around", {"why": why}), ctx)
 
     @mcp.tool(annotations=read_only, structured_output=False)
     async def wait_for_decision(proposal_id: str, ctx: Context) -> str:

@@ -174,3 +174,25 @@ def test_the_control_api_needs_the_token_from_the_session_folder(door: AgentDoor
     assert not (folder / AGENT_FILE).exists()
     with pytest.raises(ConsoleUnavailable, match="no console is running on the session folder"):
         ConsoleBridge(folder, allow_actions=False).call("summary")
+
+
+class FakeLook:
+    def __init__(self) -> None:
+        self.running = self.paused = False
+
+    def look_around(self) -> None:
+        self.running = True
+
+    def pause(self) -> None:
+        self.paused = True
+
+
+def test_look_around_runs_when_approved_and_hold_pauses_it(door: AgentDoor) -> None:
+    door.look = look = FakeLook()
+    p = door.call("propose_look_around", {"why": "see what is behind the boxes"}, allow_actions=True)
+    assert not look.running and p["title"].startswith("Look around: turn in place through 6 headings")
+    assert door.queue.approve(p["id"]).outcome == "look around started: 6 headings, a capture and map at each"
+    assert look.running
+    assert door.call("wait_proposal", {"proposal_id": p["id"], "timeout": 0})["final"] is False  # still looking
+    assert door.call("hold", {"why": "stop"}).startswith("the look around is paused: the robot holds")
+    assert look.paused
