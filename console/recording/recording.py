@@ -30,7 +30,7 @@ from typing import Any, Callable
 
 from console.recording import recording_schemas as rs
 from console.session.session_types import Notice, RobotSnapshot
-from console.session.topics import CAPTURE, GRID, JOB, MISSION, NOTICE, ROBOT, ROUTE, RUN, SCENE, SELECTION, SETTINGS
+from console.session.topics import AGENT, CAPTURE, GRID, JOB, MISSION, NOTICE, ROBOT, ROUTE, RUN, SCENE, SELECTION, SETTINGS
 
 log = logging.getLogger(__name__)
 
@@ -169,7 +169,7 @@ class Recorder:
             if key != self._run_key or now - self._run_at >= 0.5:  # progress alone: at most 2 Hz
                 self._run_key, self._run_at = key, now
                 self._put(RUN, payload)
-        elif topic in (CAPTURE, NOTICE):
+        elif topic in (CAPTURE, NOTICE, AGENT):
             self._put(topic, payload)
         elif topic == JOB and payload is not None and not payload.running:
             self._put(JOB, payload)
@@ -338,6 +338,9 @@ class Recorder:
             self._encode(rs.LOG, ns, rs.notice_log(ns, payload if isinstance(payload, Notice) else Notice("", str(payload))))
         elif topic == rs.LOG:
             self._encode(rs.LOG, ns, rs.log_message(ns, str(payload), name="operator"))
+        elif topic == AGENT:  # console.mcp: the event as JSON, and a log line replay lists
+            self._encode(rs.AGENT_EVENTS, ns, payload)
+            self._encode(rs.LOG, ns, rs.log_message(ns, str(payload.get("text", "")), payload.get("level", "info"), "agent"))
 
     def _proxy_models(self) -> Any:
         if self._proxies is None:
