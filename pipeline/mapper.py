@@ -26,7 +26,9 @@ import numpy as np
 
 from pipeline.catalog import Catalog
 from pipeline.ranging.distance import DepthScale, truncation
-from pipeline.camera.geometry import CameraError, CameraMount, Intrinsics, Pose, camera_pose_in_world
+from pipeline.camera.geometry import (
+    CameraError, CameraMount, Intrinsics, Pose, camera_pose_in_world, mount_from_gravity_height,
+)
 from pipeline.ranging.ground_contact import GroundModel
 from pipeline.mapper_config import (
     LIGHT_MODELS, MAX_IMAGE_SIDE, MapperConfig, MapperError, ModelBundleLike, as_rgb8, gravity_in_camera,
@@ -34,6 +36,7 @@ from pipeline.mapper_config import (
 )
 from pipeline.models.base import DepthMap, Detection, Prompt
 from pipeline.models.nms import nms
+from pipeline.ranging.photo_floor import floor_pass
 from pipeline.ranging.placement import heading_in_frame
 from pipeline.ranging.ranger import MappedObject, Ranger
 from pipeline.scene import Capture, Scene, SceneObject, Source
@@ -93,9 +96,11 @@ class Mapper:
         prompts: Sequence[str] | None = None,
         capture_id: str | None = None,
         image_name: str | None = None,
+        pose_given: bool = True,
     ) -> Scene:
         """The scene (world frame) of the objects in ``image_rgb``; see :meth:`run`."""
-        return self.run(image_rgb, intrinsics, mount, robot_pose, prompts, capture_id, image_name).scene
+        return self.run(image_rgb, intrinsics, mount, robot_pose, prompts, capture_id, image_name,
+                        pose_given=pose_given).scene
 
     def run(
         self,
@@ -107,6 +112,7 @@ class Mapper:
         capture_id: str | None = None,
         image_name: str | None = None,
         on_stage: StageCallback | None = None,
+        pose_given: bool = True,
     ) -> MapResult:
         """Map one image and keep the intermediate results.
 
@@ -120,6 +126,10 @@ class Mapper:
             image_name: Image file name recorded in the capture.
             on_stage: Called as each stage begins, in the order of :data:`pipeline.stage_progress.STAGES`
                 (``detect``, ``segment``, ``depth``, ``distance``); see :mod:`pipeline.stage_progress`.
+            pose_given: The mount's pitch, roll and height are known for this photo (checked against the
+                photo's floor, :mod:`pipeline.ranging.photo_floor`). ``False``: only its yaw and position
+                are; the camera's gravity and height come from the photo (the mount's height, when above
+                5 cm, is the prior) and the scene's world frame follows them.
 
         Raises:
             MapperError: Bad image, intrinsics that do not match it, empty prompts, or prompts the
@@ -148,7 +158,8 @@ class Mapper:
             )
         world_from_cam = camera_pose_in_world(robot_pose, mount)
         gravity = gravity_in_camera(world_from_cam)
-        ranger = Ranger(cfg, self.catalog, self._exact_depth, self._ground(world_from_cam, gravity))
+        ranger = Ranger(cfg, self.catalog, self._exact_depth,
+                        self._ground(world_from_cam, gravity) if pose_given else None)
         timings: dict[str, float] = {}
 
         # --- detection, depth and the image encoder, concurrently ---------------------------------
@@ -201,6 +212,15 @@ class Mapper:
         if cfg.fusion == "sigma":
             ranger.mark_hidden_contacts(objects)  # a nearer object may hide a floor contact
         scale = ranger.depth_scale(objects, depth_map)
+        floor = None
+        if cfg.fusion == "sigma" and cfg.ground_contact and cfg.floor_fit:
+            objects, scale, gravity, floor = floor_pass(
+                ranger, detections, masks, objects, image.shape, intrinsics, gravity, depth_map, scale, pose_given,
+                float(world_from_cam.translation[2]))
+            if not pose_given and floor.estimate is not None:  # the world frame follows the photo's floor
+                mount = mount_from_gravity_height(floor.estimate.gravity_cam, floor.estimate.camera_height, mount)
+                world_from_cam = camera_pose_in_world(Pose.from_rotation(robot_pose.rotation, (
+                    robot_pose.translation[0], robot_pose.translation[1], 0.0)), mount)
         fusion_note, trusted = ranger.place_all(objects, scale, intrinsics)
         if ranger.yaw_from_depth(scale, trusted):
             ranger.orient(objects, depth_map, scale, intrinsics, gravity)  # type: ignore[arg-type]
@@ -220,7 +240,9 @@ class Mapper:
             camera_position=tuple(float(v) for v in world_from_cam.translation),  # type: ignore[arg-type]
             camera_quaternion=tuple(float(v) for v in world_from_cam.quaternion),  # type: ignore[arg-type]
             timings=dict(timings),
-            models={**self._model_names(depth_map, scale), "fusion": fusion_note},
+            models={**self._model_names(depth_map, scale), "fusion": fusion_note,
+                    **({} if floor is None else {"camera_pose": floor.note}),
+                    **({} if floor is None or floor.warning is None else {"camera_pose_warning": floor.warning})},
         )
         scene = Scene(objects=tuple(scene_objects), captures=(capture,))
         return MapResult(scene, objects, depth_map, scale, timings, pairs)

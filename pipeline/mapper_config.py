@@ -125,6 +125,10 @@ class MapperConfig:
         sigma_floor: 1-sigma of the floor under an object differing from the plane [m] (ground contact).
         depth_sigma: ``sigma`` fusion: relative 1-sigma of a depth map that could not be checked
             against at least three objects' other cues on the photo.
+        floor_fit: ``sigma`` fusion with ground contact: fit the floor from the photo (object contacts, a
+            trusted depth map's plane; :mod:`pipeline.ranging.photo_floor`): with the pose given, a check
+            that warns and widens the ground-contact sigma on disagreement; without it, the camera's
+            gravity and height.
     """
 
     w_geometric: float = 0.8
@@ -155,6 +159,7 @@ class MapperConfig:
     sigma_camera_height: float = 0.03
     sigma_floor: float = 0.05
     depth_sigma: float = 0.3
+    floor_fit: bool = True
 
     def __post_init__(self) -> None:
         if self.w_geometric < 0 or self.w_depth < 0 or self.w_geometric + self.w_depth <= 0:

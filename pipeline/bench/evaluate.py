@@ -80,6 +80,12 @@ class BenchSample:
     """Camera centre above the floor [m] (the sample's ``camera_height``), ``None`` when absent."""
 
     @property
+    def pose_given(self) -> bool:
+        """The sample gives the camera's gravity (with or without its height: without, there is no floor
+        cue, as before the floor fit); a sample without ``gravity_cam`` is mapped with the pose from the photo."""
+        return self.gravity_cam is not None
+
+    @property
     def mount(self) -> CameraMount:
         """The camera on a level robot at the world origin: pitch and roll from ``gravity_cam``, height
         ``camera_height`` (floor at world z = 0, so ground-contact ranging knows the floor)."""
@@ -227,6 +233,7 @@ def run_bench(
     limit: int | None = None,
     sources: Sequence[str] | None = None,
     progress: bool = True,
+    drop_pose: bool = False,
 ) -> BenchReport:
     """Run the mapper on every sample of ``dataset_dir`` and score it.
 
@@ -242,6 +249,9 @@ def run_bench(
         limit: Only the first ``limit`` samples.
         sources: Only samples of these sources (``sunrgbd``, ``kitti`` ...).
         progress: Show a progress bar (stderr).
+        drop_pose: Give the mapper no camera pose for any photo (no ``gravity_cam``, no ``camera_height``):
+            the camera's gravity and height then come from the photo itself (a sample without
+            ``gravity_cam`` is always run so).
     """
     from tqdm import tqdm
 
@@ -280,13 +290,17 @@ def run_bench(
                 )
                 mapper = Mapper(bundle, catalog, cfg)
             assert mapper is not None
-            result = mapper.run(image, sample.intrinsics, sample.mount, Pose(),
-                                prompts=prompts, capture_id=sample.id, image_name=sample.image_path.name)
+            pose_given = not drop_pose and sample.pose_given
+            result = mapper.run(image, sample.intrinsics, sample.mount if pose_given else mount_from_gravity(None),
+                                Pose(), prompts=prompts, capture_id=sample.id, image_name=sample.image_path.name,
+                                pose_given=pose_given)
             model_names = dict(result.scene.captures[0].models)
             for o in sample.objects:
                 if o.cls is None:
                     excluded[o.label] = excluded.get(o.label, 0) + 1
-            records.append(_score_sample(sample, result, vocab, iou_threshold))
+            records.append({**_score_sample(sample, result, vocab, iou_threshold), "pose_given": pose_given,
+                            "camera_pose": result.scene.captures[0].models.get("camera_pose"),
+                            "camera_pose_warning": result.scene.captures[0].models.get("camera_pose_warning")})
             if gt_boxes:
                 mapper.close()
     finally:

@@ -123,6 +123,12 @@ def summarise(records: list[dict[str, Any]], excluded: dict[str, int]) -> dict[s
                                                if (m.get("height") or {}).get("how") == "at_least_visible"])},
         "by_source": by_source,
         "by_class": by_class,
+        "by_pose": {key: {"images": sum(1 for r in records if r.get("pose_given", True) == given),
+                          "matched": len(ms), "error_rel": _stats([m["error_rel"] for m in ms]),
+                          **_calibration([(m["error_z"], m["sigma_z"]) for m in ms if m.get("sigma_z") is not None])}
+                    for key, given in (("given", True), ("not_given", False))
+                    for ms in [[m for r in records if r.get("pose_given", True) == given for m in r["matches"]]]},
+        "pose_warnings": [f"{r['id']}: {r['camera_pose_warning']}" for r in records if r.get("camera_pose_warning")],
     }
 
 
@@ -174,6 +180,14 @@ def format_report(report: BenchReport) -> str:
     for name, c in s.get("cues", {}).items():
         lines.append(f"{name:16s} {c['n']:4d} {_fmt(c['error_rel']['mean'], '9.1%')} {_fmt(c['error_rel']['median'], '8.1%')} "
                      f"{_fmt(c['within_1_sigma'], '10.0%')} {_fmt(c['within_2_sigma'], '10.0%')}")
+    for key, what in (("given", "camera pose given"), ("not_given", "camera pose from the photo")):
+        b = s.get("by_pose", {}).get(key)
+        if b and b["images"]:
+            lines.append(f"{what:26s} {b['images']:3d} images, {b['matched']:3d} matched: relative mean "
+                         f"{_fmt(b['error_rel']['mean'], '.1%')}, median {_fmt(b['error_rel']['median'], '.1%')}, "
+                         f"fused within 1 / 2 sigma {_fmt(b['within_1_sigma'], '.0%')} / {_fmt(b['within_2_sigma'], '.0%')}")
+    for w in s.get("pose_warnings", []):
+        lines.append(f"warning: {w}")
     t = s.get("truncated")
     if t:
         lines.append(f"cut by the border: {t['matched']} matched, 3D error relative mean "

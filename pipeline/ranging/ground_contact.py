@@ -38,6 +38,7 @@ from typing import Sequence
 
 import numpy as np
 
+from pipeline.camera.floor_fit import FloorEstimate, contact_sigma
 from pipeline.ranging.distance import Box, DistanceError, Truncation, check_box
 from pipeline.ranging.fusion import Cue
 from pipeline.camera.geometry import Intrinsics
@@ -66,6 +67,9 @@ class GroundModel:
     sigma_height: float = 0.03
     sigma_floor: float = 0.05
     sigma_px: float = 1.5
+    floor: FloorEstimate | None = None
+    """The floor as fitted from the photo (:mod:`pipeline.camera.floor_fit`); when set, its covariance of
+    (pitch, roll, ln H) replaces ``sigma_pitch`` and ``sigma_height`` in the contact's sigma."""
 
     def __post_init__(self) -> None:
         g = np.asarray(self.gravity_cam, dtype=np.float64).reshape(-1)
@@ -169,8 +173,15 @@ def ground_contact_cue(
     d_h = abs(z_h - z) / (H * eps)
     e_h = c - p + centre_height * g
     d_half = abs(float(e_h[2]) / half_depth) if half_depth > 0 else 1.0
-    dz.append(d_theta * math.hypot(ground.sigma_pitch, sigma_v / intr.fy))
-    dz.append(d_h * math.hypot(ground.sigma_height, ground.sigma_floor))
+    if ground.floor is None:
+        dz.append(d_theta * math.hypot(ground.sigma_pitch, sigma_v / intr.fy))
+        dz.append(d_h * math.hypot(ground.sigma_height, ground.sigma_floor))
+    else:  # the fitted floor's covariance, propagated to this pixel (floor-to-contact depth: ~ z - half)
+        t = float(p[2])
+        dz.append(math.hypot(t * contact_sigma(ground.floor, (u, y2), intr), d_theta * sigma_v / intr.fy))
+        dz.append(d_h * ground.sigma_floor)
+        if not all(math.isfinite(v) for v in dz):
+            return None
     dz.append(d_half * half_sigma)
     sigma = math.sqrt(sum(v * v for v in dz))
     note = (f"floor at {float(np.linalg.norm(p)):.2f} m under the box bottom (row {y2:.0f}), camera {H:.2f} m up; "

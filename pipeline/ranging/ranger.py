@@ -23,7 +23,7 @@ import numpy as np
 from pipeline.catalog import Catalog, CatalogEntry
 from pipeline.ranging.distance import (
     IDENTITY_SCALE, DepthScale, FusedDistance, Truncation, depth_fit_spread, fit_depth_scale, fuse_distances,
-    inverse_variance_weights, mask_median_depth, truncation,
+    inverse_variance_weights, mask_median_depth, pooled_sigma, truncation,
 )
 from pipeline.ranging.fusion import Cue, Fused, fuse_cues
 from pipeline.camera.geometry import Intrinsics
@@ -104,6 +104,9 @@ class MappedObject:
         return float(self.sigma_z * np.linalg.norm(self.center_cam) / float(self.center_cam[2]))
 
 
+SAME_GROUND = object()
+"""``Ranger.measure``'s default ``ground``: the ranger's own floor."""
+
 EXACT_DEPTH_SIGMA = 0.085
 """Relative 1-sigma of a centre placed from exact depth (a simulator's render): exact at the visible
 surface, the centre placement still errs (cut and occluded objects): ``bench/sim_mapping.py`` measured a
@@ -139,8 +142,10 @@ class Ranger:
         intr: Intrinsics,
         gravity: np.ndarray,
         depth_map: DepthMap | None,
+        ground: GroundModel | None | object = SAME_GROUND,
     ) -> MappedObject:
-        """Everything that does not need the depth scale: truncation, mask, geometric estimate, depth value."""
+        """Everything that does not need the depth scale: truncation, mask, geometric estimate, depth value.
+        ``ground``: this object's floor (:mod:`pipeline.ranging.photo_floor`; default: the ranger's)."""
         cfg = self.config
         h, w = int(shape[0]), int(shape[1])
         box = det.box
@@ -180,22 +185,23 @@ class Ranger:
                 if vals.size:
                     obj.depth_span = (float(np.percentile(vals, 2)), float(np.percentile(vals, 98)))
         if cfg.fusion == "sigma":
-            self._geometric_cues(obj, intr, h)
+            self._geometric_cues(obj, intr, h, self.ground if ground is SAME_GROUND else ground)  # type: ignore[arg-type]
         return obj
 
-    def _geometric_cues(self, obj: MappedObject, intr: Intrinsics, image_height: int) -> None:
+    def _geometric_cues(self, obj: MappedObject, intr: Intrinsics, image_height: int,
+                        ground: GroundModel | None) -> None:
         """The cues that need no depth map: size prior and floor contact (or the border's bound)."""
         box = obj.detection.box
         if obj.geometric is not None:
             obj.cues.append(size_prior_cue(obj.geometric, box, obj.truncation, obj.size, obj.spread))
-        if self.ground is None or not obj.on_floor or not self.config.ground_contact:
+        if ground is None or not obj.on_floor or not self.config.ground_contact:
             return
         x1, y1, x2, y2 = box
         if obj.size_known:
             half, half_sigma = half_depth_stats(obj.size, obj.spread)
             hc = 0.5 * obj.size[1]
         else:  # unknown size: footprint and height from the box at the contact's distance
-            first = ground_contact_cue(box, obj.truncation, self.ground, intr, 0.0, 0.0, 0.0)
+            first = ground_contact_cue(box, obj.truncation, ground, intr, 0.0, 0.0, 0.0)
             if first is None:
                 return
             z0 = first[0].distance
@@ -203,9 +209,9 @@ class Ranger:
             half_sigma = 0.5 * half
             hc = 0.5 * (y2 - y1) * z0 / intr.fy
         if obj.truncation.bottom:
-            obj.bound = border_bound(box, image_height, self.ground, intr, half, half_sigma, hc)
+            obj.bound = border_bound(box, image_height, ground, intr, half, half_sigma, hc)
             return
-        got = ground_contact_cue(box, obj.truncation, self.ground, intr, half, half_sigma, hc)
+        got = ground_contact_cue(box, obj.truncation, ground, intr, half, half_sigma, hc)
         if got is not None:
             obj.cues.append(got[0])
             obj.ground_center = got[1]
@@ -287,7 +293,7 @@ class Ranger:
                                      f"{cfg.depth_sigma:.0%}"), False
         refs = [o for o in objects if o.geometric is not None and o.depth_value is not None and o.cues]
         ref_rel = float(np.median([min(c.rel_sigma for c in o.cues) for o in refs])) if refs else cfg.geometric_sigma
-        rel = math.sqrt(max(spread**2 - ref_rel**2, MIN_DEPTH_SIGMA**2))
+        rel = pooled_sigma(math.sqrt(max(spread**2 - ref_rel**2, MIN_DEPTH_SIGMA**2)), len(values) - 1, cfg.depth_sigma)
         trusted = scale.kind == "metric" and spread <= cfg.trust_depth_spread
         return rel, (f"sigma: depth map {rel:.0%} (spread {spread:.0%} against the other cues over "
                      f"{len(values)} reference objects)"), trusted
