@@ -48,6 +48,7 @@ def _config(args: argparse.Namespace) -> MapperConfig:
         yaw_from_depth=False if paper else None,
         ground_contact=not getattr(args, "no_ground_contact", False),
         measure_height=not getattr(args, "no_measured_height", False),
+        floor_fit=not getattr(args, "no_floor_fit", False),
     )
 
 
@@ -67,6 +68,9 @@ def _add_common(p: argparse.ArgumentParser) -> None:
                         "fixed: the --w-* weights (the paper)")
     g.add_argument("--no-ground-contact", action="store_true",
                    help="sigma fusion without ground-contact ranging (the floor under the box bottom)")
+    g.add_argument("--no-floor-fit", action="store_true",
+                   help="sigma fusion: do not fit the floor from the photo (no check of the given camera pose; "
+                        "without a pose: a level camera and no ground contact)")
     g.add_argument("--no-measured-height", action="store_true",
                    help="keep the catalog height of floor-standing objects instead of the height their box's top "
                         "edge shows at their distance")
@@ -257,7 +261,7 @@ def cmd_bench(args: argparse.Namespace) -> int:
         models = _models(args, catalog)
     report = run_bench(
         args.dataset, models, catalog, gt_boxes=args.gt_boxes, config=_config(args), iou_threshold=args.iou,
-        limit=args.limit, sources=args.source, progress=not args.no_progress,
+        limit=args.limit, sources=args.source, progress=not args.no_progress, drop_pose=args.drop_pose,
     )
     print(format_report(report))
     if args.out:
@@ -299,6 +303,8 @@ def add_bench_parser(subparsers: Any) -> argparse.ArgumentParser:
     p.add_argument("--source", action="append", default=None, help="only samples of this source (repeatable)")
     p.add_argument("--out", default="bench_report.json", help="JSON report to write (default bench_report.json; '' for none)")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    p.add_argument("--drop-pose", action="store_true",
+                   help="give the mapper no camera pose (gravity, height) for any photo: it finds them in the photo")
     _add_common(p)
     p.set_defaults(func=_run(cmd_bench, "bench"))
     return p
