@@ -124,11 +124,13 @@ class ApprovalView:
         self._draw_label()
 
     def _draw_label(self) -> None:
-        """Label the candidate's goal when it is the one the agent planned."""
-        goal = self._session.route_snapshot().candidate_goal
+        """Label the goal the agent planned while it is the candidate's or the registered route's last goal."""
+        snap = self._session.route_snapshot()
         mine = self._door.agent_goal
-        show = goal is not None and mine is not None and max(abs(a - b) for a, b in zip(goal, mine)) < 1e-6
-        if show:
+        near = self._session.workspace.resolution / 2 + 1e-6  # a registered goal is its cell's centre [m]
+        goal = next((g for g in (snap.candidate_goal, snap.goals[-1] if snap.goals else None)
+                     if g is not None and mine is not None and max(abs(a - b) for a, b in zip(g, mine)) < near), None)
+        if goal is not None:
             pos = (float(goal[0]), float(goal[1]), float(goal[2]) + 0.6)
             self._label = self._server.scene.add_label(LABEL_NODE, AGENT_LABEL, position=pos, anchor="bottom-center")
         elif self._label is not None:

@@ -7,13 +7,15 @@ moved while the proposal waits. The operator approves it in the page's Agent pan
 Chromium, Playwright) and the robot executes it; Hold from the agent pauses the mission and the
 robot holds; a second proposal rejected in the page reaches the agent with the operator's note.
 Every tool call, proposal and decision is in the session's MCAP. Skipped, with the reason, without
-``/usr/bin/chromium``, ``playwright`` or ``mcp``.
+``/usr/bin/chromium``, ``playwright`` or ``mcp``. ``MORPHONAVI_UPDATE_SCREENSHOT=1`` refreshes
+``docs/agent_panel.png`` (the page with the mission proposal waiting).
 """
 
 from __future__ import annotations
 
 import json
 import math
+import os
 import queue
 import sys
 import tempfile
@@ -34,6 +36,8 @@ TOOLS = {"get_scene_summary", "get_scene_graph", "list_objects", "get_robot_stat
          "get_last_photo", "get_recent_events", "hold", "land_here", "return_to_launch", "plan_to_point",
          "plan_to_object", "propose_mission", "propose_capture_and_map", "propose_look_around", "wait_for_decision"}
 DEADLINE = 120.0  # [s] generous: the machine may be loaded
+SHOT = REPO / "docs" / "agent_panel.png"
+UPDATE_SHOT = os.environ.get("MORPHONAVI_UPDATE_SCREENSHOT") == "1"  # refresh docs/agent_panel.png
 
 
 def _missing() -> str | None:
@@ -87,12 +91,16 @@ class Operator:
         self._thread.join(DEADLINE)
 
 
-def decide(button: str, reason: str, note: str = "", view: Any = None) -> Callable[[Any], str]:
+def decide(button: str, reason: str, note: str = "", view: Any = None, shot: Path | None = None) -> Callable[[Any], str]:
     """In the page: wait for the proposal with ``reason`` in the Agent panel, optionally type a note
-    (and wait until ``view``, the server's Agent panel, has it), click ``button``."""
+    (and wait until ``view``, the server's Agent panel, has it), click ``button``. ``shot``: save a
+    screenshot of the page with the proposal waiting there first."""
 
     def job(page: Any) -> str:
         page.get_by_text(reason).first.wait_for(timeout=DEADLINE * 1000)  # the agent's own words are shown
+        if shot is not None:
+            page.get_by_role("button", name=button).wait_for(timeout=DEADLINE * 1000)
+            page.screenshot(path=str(shot))
         if note:
             label = page.get_by_text("Note to the agent", exact=True)  # viser's text input has no label id
             label.locator("xpath=ancestor::*[.//input][1]//input").first.fill(note)
@@ -166,8 +174,10 @@ def test_an_agent_over_stdio_plans_proposes_and_the_operator_decides_in_the_brow
                     tg.start_soon(propose, "propose_mission", "go and look at the robot dog behind the boxes")
                     await _poll(lambda: bool(door.queue.pending()), "the mission proposal")
                     assert session.mission is not None and session.run.state == "idle"
+                    assert app.views["approval"].labelled  # still at the registered route's last goal
                     assert math.dist(start, position()) < 0.05, "the robot moved before the operator approved"
-                    await anyio.to_thread.run_sync(operator.do, decide("Approve", "go and look at the robot dog"))
+                    await anyio.to_thread.run_sync(operator.do, decide("Approve", "go and look at the robot dog",
+                                                                        shot=SHOT if UPDATE_SHOT else None))
                 outcome = json.loads(answers["propose_mission"])
                 assert outcome["state"] == "approved" and outcome["outcome"].startswith(f"mission {session.mission.id} started")
 
