@@ -222,3 +222,13 @@ def test_an_agent_over_stdio_plans_proposes_and_the_operator_decides_in_the_brow
     for expected in [("tool_call", "summary"), ("tool_call", "plan_to_object"),
                      ("proposal", "pending"), ("decision", "approved"), ("tool_call", "hold"), ("decision", "rejected")]:
         assert expected in kinds, f"{expected} not recorded: {kinds}"
+    from mcap_protobuf.decoder import DecoderFactory
+
+    lines = []  # what replay lists in its log
+    for path in sorted((tmp_path / "s" / "recordings").glob("*.mcap")):
+        with open(path, "rb") as f:
+            for _, _, _, log in make_reader(f, decoder_factories=[DecoderFactory()]).iter_decoded_messages(topics=["/log"]):
+                if log.name == "agent":
+                    lines.append(log.message)
+    assert any(line.startswith("agent proposes p-") for line in lines)
+    assert any("rejected: rejected by the operator: not while the robot holds" in line for line in lines), lines
