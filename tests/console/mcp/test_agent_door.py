@@ -5,6 +5,7 @@ and the control API's token (the MCP tools over stdio: tests/console/e2e/test_mc
 from __future__ import annotations
 
 import json
+import sys
 import threading
 import urllib.request
 from pathlib import Path
@@ -196,3 +197,15 @@ def test_look_around_runs_when_approved_and_hold_pauses_it(door: AgentDoor) -> N
     assert door.call("wait_proposal", {"proposal_id": p["id"], "timeout": 0})["final"] is False  # still looking
     assert door.call("hold", {"why": "stop"}).startswith("the look around is paused: the robot holds")
     assert look.paused
+
+
+def test_without_the_mcp_sdk_the_commands_say_how_to_install_it(monkeypatch: pytest.MonkeyPatch) -> None:
+    from console.cli.errors import CliError
+    from console.cli.mcp_cmd import need_mcp
+    from console.cli.morphonavi import main
+
+    monkeypatch.setitem(sys.modules, "mcp.server.mcpserver", None)  # import fails as if not installed
+    with pytest.raises(CliError, match=r"morphonavi mcp needs the MCP Python SDK \(mcp 2.x\), which is not installed: "
+                                       r"pip install 'mcp>=2.3,<3'"):
+        need_mcp("morphonavi mcp")
+    assert main(["console", "--mcp-allow-actions"]) == 2  # only with --mcp PORT
