@@ -2,7 +2,7 @@
 with ``console --mcp PORT``, the MCP server itself (streamable HTTP on 127.0.0.1).
 
 Called once by :meth:`console.app.ConsoleApp.start`. The control API always runs (loopback only, a
-token in ``<session>/agent.json``) so ``morphonavi mcp`` can attach to the console; the MCP server
+token in ``<session>/.agent.json``) so ``morphonavi mcp`` can attach to the console; the MCP server
 runs in the console only when asked.
 """
 

@@ -4,10 +4,10 @@ A running console serves :class:`~console.mcp.door.AgentDoor` requests over HTTP
 (any free port), each one ``POST /call`` with the JSON ``{"op": ..., "args": {...}, "allow_actions":
 bool}`` and the header ``Authorization: Bearer <token>``; the answer is ``{"ok": true, "result": ...}``
 or ``{"ok": false, "error": "..."}``. The port and a fresh random token are written to
-``<session>/agent.json`` (mode 0600, removed when the console stops): whoever can read the session
+``<session>/.agent.json`` (mode 0600, removed when the console stops): whoever can read the session
 folder can reach the door, no one else. ``morphonavi mcp --session DIR`` reads that file.
 
-:class:`ConsoleBridge` (the MCP server's side) re-reads ``agent.json`` when a call fails, so an MCP
+:class:`ConsoleBridge` (the MCP server's side) re-reads ``.agent.json`` when a call fails, so an MCP
 server outlives console restarts; :class:`LocalBridge` calls a door in the same process (``console
 --mcp``).
 """
@@ -30,8 +30,9 @@ from console.mcp.door import AgentDoor, AgentError
 
 log = logging.getLogger(__name__)
 
-AGENT_FILE = "agent.json"
-"""Where a console writes its control API's address and token, in its session folder."""
+AGENT_FILE = ".agent.json"
+"""Where a console writes its control API's address and token, in its session folder (a dot file: never
+listed among the session's saved snapshots)."""
 MAX_BODY = 1 << 20
 """Largest request body accepted [bytes]."""
 CALL_TIMEOUT = 60.0
@@ -43,7 +44,7 @@ class ConsoleUnavailable(AgentError):
 
 
 class ControlAPI:
-    """Serves ``door`` on 127.0.0.1 and writes ``<session_dir>/agent.json`` (see the module docstring)."""
+    """Serves ``door`` on 127.0.0.1 and writes ``<session_dir>/.agent.json`` (see the module docstring)."""
 
     def __init__(self, door: AgentDoor, session_dir: str | Path) -> None:
         self.door = door
@@ -74,7 +75,7 @@ class ControlAPI:
 
     def start(self) -> "ControlAPI":
         data = json.dumps({"url": self.url, "token": self.token, "pid": os.getpid(), "robot": self.door.robot_spec})
-        tmp = self.file.with_name(f".{AGENT_FILE}.{os.getpid()}")
+        tmp = self.file.with_name(f"{AGENT_FILE}.{os.getpid()}")
         try:
             fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o600)
             with os.fdopen(fd, "w", encoding="utf-8") as f:
@@ -101,7 +102,7 @@ class ControlAPI:
             return 404, {"ok": False, "error": f"unknown path {path!r}: POST /call"}
         given = str(headers.get("Authorization", ""))
         if not hmac.compare_digest(given.encode(), f"Bearer {self.token}".encode()):
-            return 401, {"ok": False, "error": "wrong or missing token (read it from the session folder's agent.json)"}
+            return 401, {"ok": False, "error": "wrong or missing token (read it from the session folder's .agent.json)"}
         try:
             length = int(headers.get("Content-Length", "0"))
         except ValueError:

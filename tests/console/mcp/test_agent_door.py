@@ -161,6 +161,7 @@ def test_the_control_api_needs_the_token_from_the_session_folder(door: AgentDoor
     try:
         info = json.loads((folder / AGENT_FILE).read_text())
         assert info["url"].startswith("http://127.0.0.1:") and (folder / AGENT_FILE).stat().st_mode & 0o077 == 0
+        assert not [n for n in door.session.list_saves() if "agent" in n]  # not a snapshot the operator could Load
         bridge = ConsoleBridge(folder, allow_actions=False)
         assert "robot dog" in bridge.call("summary")
         with pytest.raises(AgentError, match="proposals are off"):
