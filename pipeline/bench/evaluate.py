@@ -343,6 +343,8 @@ def _score_sample(sample: BenchSample, result: MapResult, vocab: set[str], iou_t
             "cut": list(est.cut_sides),
             "cues": cues,
             "rejected": [n for n, _ in est.fusion.rejected] if est.fusion else [],
+            "size_prior_doubt": next((c.note.split("; ", 1)[1] for c in est.cues
+                                      if c.name == "size_prior" and "down-weighted" in c.note), None),
             "contact_hidden_by": est.contact_hidden_by,  # set: the ground contact was only an upper bound
             "height": None if est.height is None else {"how": est.height.how, "m": round(est.height.height, 3)},
             "sigma_z": None if est.sigma_z is None else round(est.sigma_z, 4),

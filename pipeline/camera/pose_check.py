@@ -75,12 +75,21 @@ def floor_check(scene: Scene, floor_z: float = 0.0, *, under_limit: float = UNDE
     Floating is judged only on objects the image border does not cut and that stand on no other
     object of the photo, so a photo from the air of the upper boxes of a stack is not flagged.
 
+    A capture whose given camera pose the mapper found at odds with the photo's floor (its
+    ``models["camera_pose_warning"]``, naming the fitted and given pitch and height) gives that warning first.
+
     Args:
         scene: One photo's objects in the world frame (known-size objects are judged).
         floor_z: Height of the floor in the world frame [m].
         under_limit: Ground level this far under the floor [m] is reported.
         float_limit: Ground level this far over the floor [m] is reported (two or more objects).
     """
+    # the mapper's own check of a given pose against the photo's floor (pipeline.ranging.photo_floor)
+    fitted = [str(c.models["camera_pose_warning"]) for c in scene.captures if c.models.get("camera_pose_warning")]
+    return fitted + _landing_check(scene, floor_z, under_limit, float_limit)
+
+
+def _landing_check(scene: Scene, floor_z: float, under_limit: float, float_limit: float) -> list[str]:
     bottoms = _bottoms(scene.objects, floor_z)
     if not bottoms:
         return []

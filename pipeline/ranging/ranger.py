@@ -193,7 +193,7 @@ class Ranger:
         """The cues that need no depth map: size prior and floor contact (or the border's bound)."""
         box = obj.detection.box
         if obj.geometric is not None:
-            obj.cues.append(size_prior_cue(obj.geometric, box, obj.truncation, obj.size, obj.spread))
+            obj.cues.append(size_prior_cue(obj.geometric, box, obj.truncation, obj.size, obj.spread, focal=(intr.fx, intr.fy)))
         if ground is None or not obj.on_floor or not self.config.ground_contact:
             return
         x1, y1, x2, y2 = box

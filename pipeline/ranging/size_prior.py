@@ -68,6 +68,7 @@ def size_prior_cue(
     size_whl: Sequence[float],
     spread_whl: Sequence[float],
     sigma_px: float = 1.5,
+    focal: tuple[float, float] | None = None,
 ) -> Cue:
     """The size prior's distance (the estimate's centre depth [m]) with its sigma (module docstring).
 
@@ -78,6 +79,8 @@ def size_prior_cue(
         size_whl: The class's typical size [m].
         spread_whl: Its relative spread (1-sigma).
         sigma_px: Box edge 1-sigma [px] (at least; 2 % of the measured dimension when larger).
+        focal: ``(fx, fy)`` [px]: check a whole box's aspect against the class (:func:`too_wide`); an
+            implausibly wide one adds ``ln k`` to the relative sigma and says why in the note.
     """
     x1, y1, x2, y2 = check_box(box)
     w, h, l = (float(v) for v in size_whl)
@@ -98,7 +101,32 @@ def size_prior_cue(
     sigma = z * rel
     if estimate.fit is not None:
         sigma = math.hypot(sigma, estimate.fit.yaw_spread)
+    if focal is not None and not trunc.vertical_cut and not trunc.horizontal_cut:
+        k = too_wide(box, size_whl, spread_whl, focal)
+        if k > 1.0:  # the box shows less of the height than the class has: down-weighted, not moved
+            sigma = math.hypot(sigma, z * math.log(k))
+            how += (f"; size prior down-weighted: the box is {k:.2f}x wider for its height than the class can look "
+                    "(crouching, sitting, partly hidden or a box around more than the object)")
     return Cue("size_prior", z, sigma, how)
 
 
-__all__ = ["DEFAULT_SPREAD", "check_spread", "half_depth_stats", "horizontal_extent_stats", "size_prior_cue"]
+ASPECT_SIGMAS = 2.0
+"""A box is implausibly wide when its width / height exceeds the widest view of the class (the footprint's
+diagonal over the height) with both sizes this many spreads off in the widening direction."""
+
+
+def too_wide(box: Box, size_whl: Sequence[float], spread_whl: Sequence[float], focal: tuple[float, float]) -> float:
+    """How many times the box's aspect ``(w_px / fx) / (h_px / fy)`` exceeds the widest a ``size_whl`` object can
+    look (``hypot(w, l) (1 + n s_wl) / (h (1 - n s_h))``, ``n`` = :data:`ASPECT_SIGMAS`); 1.0 when it does not
+    (a box cut by the border is not judged: the caller passes only whole boxes)."""
+    x1, y1, x2, y2 = check_box(box)
+    w, h, l = (float(v) for v in size_whl)
+    sw, sh, sl = check_spread(spread_whl)
+    fx, fy = focal
+    aspect = ((x2 - x1) / fx) / ((y2 - y1) / fy)
+    widest = math.hypot(w, l) * (1 + ASPECT_SIGMAS * max(sw, sl)) / (h * max(1 - ASPECT_SIGMAS * sh, 0.2))
+    return max(aspect / widest, 1.0)
+
+
+__all__ = ["ASPECT_SIGMAS", "DEFAULT_SPREAD", "check_spread", "half_depth_stats", "horizontal_extent_stats", "size_prior_cue",
+           "too_wide"]

@@ -78,4 +78,9 @@ def test_a_photo_from_a_high_tilted_camera_mapped_with_the_level_mount_is_flagge
     assert len(scenes["true"].objects) >= 2
     assert floor_check(scenes["true"]) == []  # the right pose: everything on (or over) the floor
     warnings = floor_check(scenes["assumed"])
-    assert len(warnings) == 1 and "mount height and pitch" in warnings[0], warnings
+    # the mapper's own floor fit names the photo's pose (true: 30 deg down, 1.2 m up), then the landing check
+    assert len(warnings) == 2 and "mount height and pitch" in warnings[1], warnings
+    import re
+
+    got = re.search(r"pitch (-?[\d.]+) deg \(given 0\.0\), camera ([\d.]+) m above the floor \(given 0\.35 m\)", warnings[0])
+    assert got and abs(float(got[1]) - 30.0) < 3.0 and abs(float(got[2]) - 1.2) < 0.2, warnings[0]
