@@ -1,8 +1,16 @@
-"""The 3D planning grid: workspace, occupancy from scene boxes, dangerous margin, layer costs.
+"""The 3D planning grid: the robot's configuration space from scene boxes and known space, the
+danger band, layer costs.
 
 Everything here is in the world frame (z up) [m]. Cell ``(i, j, k)`` spans
 ``min + (i, j, k) * resolution`` to ``min + (i+1, j+1, k+1) * resolution``; ``k = 0`` is the
 ground layer (the robot walks there), ``k = 1`` the take-off/landing layer, ``k >= 2`` flight.
+
+:func:`build_grid` closes every cell the robot (:mod:`planner.robot_model`) cannot stand in:
+inside an object, within its radius of an obstacle (objects, unlabelled obstacles the depth saw,
+unknown space unless allowed, the column under a floating object), so no route passes closer than
+the radius; the danger band beyond it only makes cells dearer (Nav2's inflation layer). Known space
+comes from :mod:`pipeline.mapping.known_space` (read through :class:`KnownSpaceLike`); a scene
+without it is fully known.
 """
 
 from __future__ import annotations
@@ -10,12 +18,13 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from enum import IntEnum
-from typing import Iterable, Sequence
+from typing import Any, Iterable, Mapping, Protocol, Sequence
 
 import numpy as np
-from scipy import ndimage
 
 from pipeline.scene import Scene, SceneObject
+from planner.cspace import box_distance, dilate, floating_objects, object_distances
+from planner.robot_model import MORPHOGEAR, RobotModel, RobotModelError
 
 
 class CellState(IntEnum):
@@ -142,22 +151,104 @@ def box_cells(obj: SceneObject, ws: Workspace) -> np.ndarray:
     return mask
 
 
+class Closed(IntEnum):
+    """Why a cell is impassable (:attr:`PlanningGrid.reason`); ``OPEN`` for passable cells."""
+
+    OPEN = 0
+    OBJECT = 1  # inside a mapped object's box
+    CLEARANCE = 2  # within the robot's radius of an obstacle (or, walking, under one below its height)
+    UNLABELLED = 3  # a depth surface no mapped object explains
+    UNKNOWN = 4  # not seen yet (unknown space closed)
+    BENEATH = 5  # under a floating object, not seen free
+
+
+UNKNOWN_POLICIES = ("closed", "allow")
+"""``closed`` (default): unknown cells are obstacles; ``allow``: passable, dearer, marked unseen."""
+
+DANGER_BAND = 0.25
+"""Width [m] of the dangerous (dearer) band beyond the robot's radius (Nav2's inflation cost)."""
+
+KNOWN_RULES = {
+    "fully_known": "fully known: no known space in the scene, every cell outside the objects is taken as free",
+    "closed": "known space: only seen-free space is planned through (unknown space closed)",
+    "allow": "known space: unknown space allowed (routes through it are marked unseen)",
+}
+"""The rule a grid was built with (:attr:`PlanningGrid.rule`) and how ``plan`` says it."""
+
+
+class KnownSpaceLike(Protocol):
+    """What the planner reads of :class:`pipeline.mapping.known_space.KnownSpace` (duck-typed: the
+    planner imports only :mod:`pipeline.scene`)."""
+
+    def planning_view(self, origin: Sequence[float], shape: Sequence[int], resolution: float,
+                      objects: Sequence[SceneObject] = ...) -> tuple[np.ndarray, np.ndarray]: ...
+
+
 @dataclass(frozen=True)
 class PlanningGrid:
-    """Cell states over a workspace. ``state[i, j, k]`` holds a :class:`CellState`."""
+    """Cell states over a workspace. ``state[i, j, k]`` holds a :class:`CellState`.
+
+    ``OCCUPIED`` means impassable for the robot (its configuration space): inside an object, within
+    its radius of an obstacle, an unlabelled obstacle, unknown space (closed by default) or the
+    column under a floating object; :attr:`reason` says which (:class:`Closed`).
+    ``DANGEROUS`` cells are passable but dearer: within the danger band beyond the radius, or
+    unseen (``unknown="allow"``).
+
+    Attributes:
+        workspace: Bounds and resolution.
+        state: ``uint8 [nx, ny, nz]`` of :class:`CellState`.
+        margin: The robot's walking radius [m] (``robot.radius``).
+        owners: Object ids; ``owner`` indexes them (``-1``: no object) for object cells.
+        reason: ``uint8 [nx, ny, nz]`` of :class:`Closed` (``None`` on grids made elsewhere: all
+            occupied cells count as objects).
+        unseen: ``bool [nx, ny, nz]``: passable cells not seen free (only with ``unknown="allow"``).
+        robot: The robot's size.
+        rule: Key of :data:`KNOWN_RULES`.
+        objects: The scene's objects (world frame), to name the nearest in messages.
+        unlabelled: Planning cells holding unlabelled obstacles.
+        floating: Ids of floating objects whose column is closed (not seen free beneath).
+    """
 
     workspace: Workspace
     state: np.ndarray
     margin: float
     owners: tuple[str, ...] = ()
     owner: np.ndarray | None = None  # int32 [nx, ny, nz]: index into ``owners`` or -1
+    reason: np.ndarray | None = None
+    unseen: np.ndarray | None = None
+    robot: RobotModel = MORPHOGEAR
+    rule: str = "fully_known"
+    objects: tuple[SceneObject, ...] = ()
+    unlabelled: int = 0
+    floating: tuple[str, ...] = ()
+    build: Mapping[str, Any] | None = None  # build_grid's keyword arguments (for :meth:`without`)
+
+    def without(self, ids: Iterable[str]) -> "PlanningGrid":
+        """The same grid built without the objects ``ids`` (same known space and rules)."""
+        drop = set(ids)
+        kw = dict(self.build or {"robot": self.robot})
+        return build_grid([o for o in self.objects if o.id not in drop], self.workspace, **kw)
 
     def owner_of(self, cell: Sequence[int]) -> str | None:
-        """Id of the object occupying a cell, if any."""
+        """Id of the object occupying a cell, if any; for a cell closed because it lies within the
+        robot's radius of an object (:attr:`Closed.CLEARANCE`), that object."""
         if self.owner is None:
             return None
         i = int(self.owner[cell[0], cell[1], cell[2]])
-        return self.owners[i] if i >= 0 else None
+        if i >= 0:
+            return self.owners[i]
+        if self.reason is not None and int(self.reason[cell[0], cell[1], cell[2]]) == Closed.CLEARANCE:
+            obj, dist = self.nearest_object(self.workspace.centers(np.array([cell]))[0])
+            r = self.robot.radius if cell[2] == 0 else self.robot.flying_radius
+            if obj is not None and dist <= r + 1e-9:
+                return obj.id
+        return None
+
+    def reason_at(self, cell: Sequence[int]) -> Closed:
+        """Why the cell is closed (``OPEN`` when passable)."""
+        if self.reason is None:
+            return Closed.OBJECT if self.state_at(cell) is CellState.OCCUPIED else Closed.OPEN
+        return Closed(int(self.reason[cell[0], cell[1], cell[2]]))
 
     def counts(self) -> dict[str, int]:
         """Number of cells per state."""
@@ -181,32 +272,197 @@ class PlanningGrid:
     def state_at(self, cell: Sequence[int]) -> CellState:
         return CellState(int(self.state[cell[0], cell[1], cell[2]]))
 
+    def walk_layers(self) -> int:
+        """Layers (from the floor) the walking body spans: ``ceil(height / resolution)``, at least 1."""
+        return max(1, min(self.state.shape[2], int(math.ceil(self.robot.height / self.workspace.resolution - 1e-9))))
+
+    def own_cells(self, position: Sequence[float]) -> np.ndarray:
+        """``bool [nx, ny, nz]``: the robot's own cells at ``position`` (world [m]): free by
+        definition. On the floor (below the take-off layer) the ground cells whose centre lies
+        within ``robot.radius`` of it horizontally; in the air the cells within
+        ``robot.flying_radius`` of it; always the cell holding it."""
+        ws = self.workspace
+        out = np.zeros(self.state.shape, dtype=bool)
+        cell = ws.cell_of(position)
+        if cell is None:
+            return out
+        xs, ys, zs = ws.axes()
+        p = [float(v) for v in position]
+        if cell[2] == 0:
+            out[:, :, 0] = np.hypot(xs[:, None] - p[0], ys[None, :] - p[1]) <= self.robot.radius + 1e-9
+        else:
+            r = self.robot.flying_radius
+            out[:] = ((xs[:, None, None] - p[0]) ** 2 + (ys[None, :, None] - p[1]) ** 2
+                      + (zs[None, None, :] - p[2]) ** 2) <= r * r + 1e-9
+        out[cell] = True
+        return out
+
+    def objects_at(self, position: Sequence[float]) -> list[SceneObject]:
+        """Objects overlapping the robot's body at ``position`` (world [m]; walking cylinder on the
+        floor layer, flying sphere above)."""
+        ws = self.workspace
+        cell = ws.cell_of(position)
+        p = np.asarray([[float(v) for v in position]])
+        out = []
+        for o in self.objects:
+            if cell is not None and cell[2] == 0:
+                lo, hi = o.position[2] - o.size[1] / 2, o.position[2] + o.size[1] / 2
+                if hi <= ws.floor or lo >= ws.floor + self.robot.height:
+                    continue
+                if box_distance(o, p, horizontal=True)[0] < self.robot.radius:
+                    out.append(o)
+            elif box_distance(o, p)[0] < self.robot.flying_radius:
+                out.append(o)
+        return out
+
+    def nearest_object(self, point: Sequence[float]) -> tuple[SceneObject | None, float]:
+        """The object nearest a world point [m] and its distance [m] (horizontal on the floor layer)."""
+        ws = self.workspace
+        cell = ws.cell_of(point)
+        flat = cell is not None and cell[2] == 0
+        p = np.asarray([[float(v) for v in point]])
+        best: tuple[SceneObject | None, float] = (None, math.inf)
+        for o in self.objects:
+            d = float(box_distance(o, p, horizontal=flat)[0])
+            if d < best[1]:
+                best = (o, d)
+        return best
+
+
+def _object_cells(objs: Sequence[SceneObject], ws: Workspace) -> tuple[np.ndarray, np.ndarray]:
+    occupied = np.zeros(ws.shape, dtype=bool)
+    owner = np.full(ws.shape, -1, dtype=np.int32)
+    for n, obj in enumerate(objs):
+        cells = box_cells(obj, ws)
+        owner[cells & ~occupied] = n
+        occupied |= cells
+    return occupied, owner
+
+
+def _beneath(objs: Sequence[SceneObject], ws: Workspace, seen_free: np.ndarray | None) -> tuple[np.ndarray, list[str]]:
+    """Cells under floating objects (down to the floor), less what was seen free; and their ids."""
+    out = np.zeros(ws.shape, dtype=bool)
+    ids = []
+    for n in floating_objects(objs, ws.floor):
+        cells = box_cells(objs[n], ws)
+        if not cells.any():
+            continue
+        col = cells.any(axis=2)
+        k_low = int(np.argmax(cells.any(axis=(0, 1))))
+        under = np.zeros(ws.shape, dtype=bool)
+        under[:, :, :k_low] = col[:, :, None]
+        if seen_free is not None:
+            under &= ~seen_free
+        if under.any():
+            out |= under
+            ids.append(objs[n].id)
+    return out, ids
+
 
 def build_grid(
     objects: Scene | Iterable[SceneObject],
     workspace: Workspace = Workspace(),
     margin: float = 0.35,
+    *,
+    robot: RobotModel | None = None,
+    known: KnownSpaceLike | None = None,
+    unknown: str = "closed",
+    danger_band: float = DANGER_BAND,
+    floating: str = "close",
 ) -> PlanningGrid:
-    """Occupancy and danger from a scene's world-frame boxes.
+    """The robot's configuration space from a scene's world-frame boxes and, if given, known space.
 
     Args:
         objects: A scene (or its objects) in the world frame.
         workspace: Bounds and resolution.
-        margin: Robot radius [m]: free cells whose centre lies within this distance of an
-            occupied cell's centre become dangerous.
+        margin: Robot radius [m] walking and flying when ``robot`` is not given (0: a point robot).
+        robot: The robot's size (:class:`planner.robot_model.RobotModel`); overrides ``margin``.
+        known: Known space (``None``: the scene is taken as fully known: every cell outside the
+            objects is free, as hand-made maps expect).
+        unknown: ``closed`` or ``allow`` (:data:`UNKNOWN_POLICIES`); ignored without known space.
+        danger_band: Width [m] of the dearer band beyond the radius.
+        floating: ``close`` the column under a floating object unless seen free (with known space),
+            or ``keep`` it (a simulator's true world, where floating things really float).
+
+    Rules (world frame, cell centres): obstacles are the objects' boxes, unlabelled cells (known
+    occupied, no object explains them), unknown cells (when closed) and the columns beneath
+    floating objects. The **ground layer** (``k = 0``, walking) is closed where an obstacle lies
+    within ``robot.radius`` horizontally of the cell's centre anywhere up to ``robot.height`` (the
+    walking cylinder); **air layers** where an obstacle lies within ``robot.flying_radius`` in 3D.
+    Cell obstacles are their cubes, objects their exact boxes. Cells within the further
+    ``danger_band`` are dangerous.
     """
-    if not (margin >= 0 and math.isfinite(margin)):
-        raise GridError(f"margin must be >= 0 m, got {margin}")
+    rb = robot if robot is not None else None
+    if rb is None:
+        if isinstance(margin, bool) or not isinstance(margin, (int, float)) or not (margin >= 0 and math.isfinite(margin)):
+            raise GridError(f"margin must be >= 0 m, got {margin}")
+        try:
+            rb = RobotModel.with_radius(float(margin))
+        except RobotModelError as exc:
+            raise GridError(str(exc)) from None
+    if not (isinstance(danger_band, (int, float)) and math.isfinite(danger_band) and danger_band >= 0):
+        raise GridError(f"danger_band must be a finite number >= 0 m, got {danger_band!r}")
+    if unknown not in UNKNOWN_POLICIES:
+        raise GridError(f"unknown must be one of {', '.join(UNKNOWN_POLICIES)}, got {unknown!r}")
+    if floating not in ("close", "keep"):
+        raise GridError(f"floating must be 'close' or 'keep', got {floating!r}")
+    ws = workspace
+    res = ws.resolution
     objs = objects.objects if isinstance(objects, Scene) else tuple(objects)
-    occupied = np.zeros(workspace.shape, dtype=bool)
-    owner = np.full(workspace.shape, -1, dtype=np.int32)
-    for n, obj in enumerate(objs):
-        cells = box_cells(obj, workspace)
-        owner[cells & ~occupied] = n
-        occupied |= cells
-    state = np.zeros(workspace.shape, dtype=np.uint8)
-    if occupied.any() and margin > 0:
-        dist = ndimage.distance_transform_edt(~occupied, sampling=workspace.resolution)
-        state[(dist <= margin + 1e-9) & ~occupied] = CellState.DANGEROUS
-    state[occupied] = CellState.OCCUPIED
-    return PlanningGrid(workspace, state, margin, tuple(o.id for o in objs), owner)
+    obj_occ, owner = _object_cells(objs, ws)
+    if known is not None:
+        try:
+            kstate, unl = known.planning_view(ws.min, ws.shape, res, objs)
+        except ValueError as exc:
+            raise GridError(f"known space: {exc}") from None
+        unl = unl & ~obj_occ
+        unknown_cells = (kstate == 0) & ~obj_occ
+        seen_free: np.ndarray | None = kstate == 1
+        rule = unknown
+    else:
+        unl = np.zeros(ws.shape, dtype=bool)
+        unknown_cells = np.zeros(ws.shape, dtype=bool)
+        seen_free = None
+        rule = "fully_known"
+    if floating == "close" and known is not None:
+        beneath, floating_ids = _beneath(objs, ws, seen_free)
+        beneath &= ~obj_occ
+    else:
+        beneath, floating_ids = np.zeros(ws.shape, dtype=bool), []
+    closed_unknown = unknown_cells if rule == "closed" else np.zeros(ws.shape, dtype=bool)
+    cell_obst = unl | beneath | closed_unknown
+    reason = np.zeros(ws.shape, dtype=np.uint8)
+    danger = np.zeros(ws.shape, dtype=bool)
+    axes = ws.axes()
+    reach_w = rb.radius + danger_band
+    reach_f = rb.flying_radius + danger_band
+    # air layers: spheres of the flying radius
+    d3, _ = object_distances(objs, axes, reach_f)
+    near3 = dilate(cell_obst, rb.flying_radius, res)
+    reason[(d3 <= rb.flying_radius + 1e-9) | near3] = Closed.CLEARANCE
+    danger |= (d3 <= reach_f + 1e-9) | dilate(cell_obst, reach_f, res)
+    # ground layer: the walking cylinder
+    kh = max(1, min(ws.shape[2], int(math.ceil(rb.height / res - 1e-9))))
+    d2, _ = object_distances(objs, axes, reach_w, z_band=(ws.floor, ws.floor + rb.height))
+    col = cell_obst[:, :, :kh].any(axis=2)
+    ground = (d2 <= rb.radius + 1e-9) | dilate(col, rb.radius, res)
+    reason[:, :, 0] = np.where(ground, Closed.CLEARANCE, Closed.OPEN)
+    danger[:, :, 0] = (d2 <= reach_w + 1e-9) | dilate(col, reach_w, res)
+    # what the cell (for the ground layer: its walking column) itself holds wins over clearance
+    for mask, why in ((closed_unknown, Closed.UNKNOWN), (beneath, Closed.BENEATH), (unl, Closed.UNLABELLED),
+                      (obj_occ, Closed.OBJECT)):
+        if why is not Closed.OBJECT:  # an object above the floor cell only crowds the walking body: clearance
+            reason[:, :, 0][mask[:, :, :kh].any(axis=2)] = why
+        reason[mask] = why
+    state = np.zeros(ws.shape, dtype=np.uint8)
+    state[danger] = CellState.DANGEROUS
+    unseen = None
+    if rule == "allow":
+        unseen = unknown_cells.copy()
+        unseen[:, :, 0] = unknown_cells[:, :, :kh].any(axis=2)
+        unseen &= reason == Closed.OPEN
+        state[unseen] = CellState.DANGEROUS
+    state[reason != Closed.OPEN] = CellState.OCCUPIED
+    build = {"robot": rb, "known": known, "unknown": unknown, "danger_band": danger_band, "floating": floating}
+    return PlanningGrid(ws, state, rb.radius, tuple(o.id for o in objs), owner, reason, unseen, rb, rule, tuple(objs),
+                        int(unl.sum()), tuple(floating_ids), build)

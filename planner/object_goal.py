@@ -30,8 +30,10 @@ Reachability from a start point, with the Aerial-Ground A*'s own rules:
   object lies outside the planning workspace, which has to be widened), ``no_free_floor`` (every
   floor cell within :data:`APPROACH_MAX` is occupied), ``start_cut_off`` (the robot's own
   component holds no floor), ``closed_in`` (passable floor lies beside it but neither walking nor
-  flying gets there), ``cramped`` (floor the robot gets to lies beside it, but none keeps the
-  robot's radius from every object), ``walled_off`` (some such floor keeps the radius, but another
+  flying gets there), ``cramped`` (floor lies beside it, outside every object, but none is
+  passable for the robot's size: none keeps its radius from every obstacle, or part of it is not
+  seen yet; or floor the robot gets to lies beside it, but none keeps the robot's radius from
+  every object), ``walled_off`` (some such floor keeps the radius, but another
   object stands between each spot and the object), ``planner`` (the A* found no path where the
   components said there was one). When an unreachable object's centre lies outside the workspace
   the reason says so too.
@@ -52,7 +54,7 @@ from scipy import ndimage
 
 from pipeline.scene import Scene, SceneObject
 
-from planner.grid import CellState, PlanningGrid
+from planner.grid import CellState, Closed, PlanningGrid
 from planner.mission import MissionError, SegmentKind, mission_from_cells
 from planner.route import Route
 
@@ -246,10 +248,17 @@ class Reachability:
             return "outside_workspace", (f"it lies outside the planning workspace ({box}; its centre at "
                                          f"({x:.2f}, {y:.2f})): widen the workspace to plan there")
         r = f"{APPROACH_MAX:.1f} m"
-        if not (near & self._ground_ok).any():
+        floor = near & self._floor_not_object()
+        if not floor.any():
             code, text = "no_free_floor", f"no free floor within {r} of it: obstacles cover the floor around it"
         elif not self._all[:, :, 0].any() and not self._walk.any():
             code, text = "start_cut_off", "the robot's position is cut off from the floor"
+        elif not (near & self._ground_ok).any():
+            unseen = self.grid.reason is not None and bool(
+                np.any(self.grid.reason[:, :, 0][floor] == Closed.UNKNOWN))
+            code, text = "cramped", (f"no floor spot within {r} of it keeps the robot's {self.grid.margin:.2f} m "
+                                     "radius from every obstacle (too cramped)"
+                                     + ("; part of it is not seen yet: Look around" if unseen else ""))
         elif not connected:
             code, text = "closed_in", (f"the free floor within {r} of it cannot be reached by walking or by flying "
                                        "(closed in by obstacles)")
@@ -262,6 +271,13 @@ class Reachability:
         if not (ws.min[0] <= x <= ws.max[0] and ws.min[1] <= y <= ws.max[1]):
             text += f"; its centre ({x:.2f}, {y:.2f}) lies outside the planning workspace ({box})"
         return code, text
+
+    def _floor_not_object(self) -> np.ndarray:
+        """Ground cells not inside an object (free, dangerous, or closed only by the robot's size or
+        by what was not seen)."""
+        if self.grid.reason is None:
+            return self._ground_ok
+        return self.grid.reason[:, :, 0] != Closed.OBJECT
 
     def _clear(self, cell: np.ndarray) -> bool:
         """Whether ground cell ``(i, j)``'s centre keeps the robot's radius from every object's footprint."""

@@ -5,7 +5,14 @@ planned from the end of the *registered* path (green), or from the start. The ca
 registered, discarded, and the last registered segment undone. Positions are world frame [m].
 
 Planning never raises for operator mistakes: :class:`PlanResult` carries ``ok`` and a message
-(goal outside the workspace, inside an obstacle, no path); the route's state is then unchanged.
+(goal outside the workspace, inside an obstacle, too close to one for the robot's radius, not seen
+yet with where to look from, no path); the route's state is then unchanged.
+
+One rule for the goal check, the route and the goal: the planning grid's configuration space
+(:func:`planner.grid.build_grid`). A goal is the centre of its cell (on the floor for the ground
+layer): that cell is what is checked and planned to, and :attr:`PlanResult.goal` says where the goal
+ended up. The robot's own cells at :attr:`Route.start` are free by definition (a robot mapped
+inside an object can still leave it; :attr:`Route.start_warning` names the object).
 """
 
 from __future__ import annotations
@@ -19,8 +26,10 @@ from typing import Any, Sequence
 import numpy as np
 
 from planner.astar import AStarSearcher, min_finite_cost
-from planner.grid import CellState, CostWeights, PlanningGrid
+from planner.cspace import box_distance
+from planner.grid import Closed, CostWeights, PlanningGrid
 from planner.mission import Mission, mission_from_cells
+from planner.viewpoint import suggest_viewpoint
 
 Vec3 = tuple[float, float, float]
 
@@ -35,6 +44,10 @@ class PlanResult:
     cost: float = math.inf
     expanded: int = 0
     seconds: float = 0.0
+    goal: Vec3 | None = None  # where the goal ended up: its cell's centre (floor for the ground layer) [m]
+    unseen: np.ndarray | None = None  # bool per path cell: not seen free (only with unknown space allowed)
+    unseen_m: float = 0.0  # metres of the path whose move ends in an unseen cell
+    viewpoint: Vec3 | None = None  # goal not seen yet: a reachable spot to look from (camera position) [m]
 
     def points(self, grid: PlanningGrid) -> np.ndarray:
         """World points of the path (cell centres, ground cells on the floor) [m]."""
@@ -57,6 +70,16 @@ def _lowest_cost(cost: np.ndarray) -> float | None:
         return None
 
 
+def box_contains_xy(obj: Any, pts: np.ndarray, grow: float) -> np.ndarray:
+    """Which world points ``(N, 3)`` [m] lie within ``obj``'s box grown by ``grow`` [m] on every side."""
+    w, h, l = obj.size
+    c, s = math.cos(obj.yaw), math.sin(obj.yaw)
+    d = pts - np.asarray(obj.position)
+    along = np.abs(c * d[:, 0] + s * d[:, 1])
+    across = np.abs(-s * d[:, 0] + c * d[:, 1])
+    return (along <= l / 2 + grow) & (across <= w / 2 + grow) & (np.abs(d[:, 2]) <= h / 2 + grow)
+
+
 def _fmt(p: Sequence[float]) -> str:
     return "(" + ", ".join(f"{v:.2f}" for v in p) + ")"
 
@@ -77,15 +100,55 @@ class Route:
                  no_corner_cutting: bool = True) -> None:
         self._grid = grid
         self._weights = weights
-        self._cost = grid.cost(weights)
+        self.start: Vec3 = (float(start[0]), float(start[1]), float(start[2]))
+        self.start_warning = ""
+        self._cost = self._own_cost()
         self._min_cost = _lowest_cost(self._cost)
         self.no_corner_cutting = bool(no_corner_cutting)
         self._searcher = AStarSearcher()  # buffers reused by every plan on this route, whatever the thread
         self._search_lock = threading.Lock()
-        self.start: Vec3 = (float(start[0]), float(start[1]), float(start[2]))
         self.registered: list[np.ndarray] = []
         self.candidate: PlanResult | None = None
         self.candidate_goal: Vec3 | None = None
+
+    def _own_cost(self) -> np.ndarray:
+        """The grid's cost with the robot's own cells at :attr:`start` opened (free by definition);
+        sets :attr:`start_warning` when they overlap an object."""
+        cost = self._grid.cost(self._weights)
+        self.start_warning = ""
+        p = self.start
+        if not all(math.isfinite(v) for v in p) or self._grid.workspace.cell_of(p) is None:
+            return cost
+        own = self._grid.own_cells(p) & ~np.isfinite(cost)
+        if own.any():
+            base = self._grid.cost(CostWeights(self._weights.ground, self._weights.takeoff, self._weights.flight,
+                                               self._weights.danger, False))
+            layer = np.full(cost.shape[2], self._weights.flight)
+            layer[0] = self._weights.ground
+            if cost.shape[2] > 1:
+                layer[1] = self._weights.takeoff
+            opened = np.where(np.isfinite(base), base, np.broadcast_to(layer, cost.shape))
+            cost[own] = opened[own]
+        hit = self._grid.objects_at(p)
+        if hit:
+            # the robot stands there, so these objects cannot (a mapping error): around them, plan as
+            # if they were not there, so the robot can walk out
+            try:
+                alt = self._grid.without(o.id for o in hit).cost(self._weights)
+            except (TypeError, ValueError):  # a grid made elsewhere without its build arguments: own cells only
+                alt = None
+            if alt is not None:
+                near = np.zeros(cost.shape, dtype=bool)
+                reach = max(self._grid.robot.radius, self._grid.robot.flying_radius) + 0.5
+                pts = self._grid.workspace.centers(np.argwhere(np.ones(cost.shape, dtype=bool)))
+                for o in hit:
+                    near |= box_contains_xy(o, pts, reach).reshape(cost.shape)
+                fix = near & ~np.isfinite(cost) & np.isfinite(alt)
+                cost[fix] = alt[fix]
+            names = ", ".join(f"{o.label} '{o.id}'" for o in hit[:3]) + (" ..." if len(hit) > 3 else "")
+            self.start_warning = (f"the robot at {_fmt(p)} overlaps {names} on the map: its own cells are taken as "
+                                  "free (it stands there); check the map or move the object")
+        return cost
 
     # --- state ---------------------------------------------------------------------------------
     @property
@@ -118,37 +181,148 @@ class Route:
 
     # --- planning ------------------------------------------------------------------------------
     def check_point(self, p: Sequence[float], what: str) -> tuple[tuple[int, int, int] | None, str]:
-        """The cell of a start/goal point, or ``None`` and the reason it cannot be used."""
+        """The cell of a start/goal point, or ``None`` and the reason it cannot be used (the same
+        configuration-space rule as the route; see :meth:`why_closed`)."""
+        cell, why = self._locate(p, what)
+        if cell is None:
+            return None, why
+        if not math.isfinite(self._cost[cell]):
+            return None, self.why_closed(cell, p, what)
+        return cell, ""
+
+    def _locate(self, p: Sequence[float], what: str) -> tuple[tuple[int, int, int] | None, str]:
+        """The cell of a point (passable or not), or ``None`` and why (not 3 finite numbers, outside)."""
         ws = self._grid.workspace
+        try:
+            if len(p) != 3 or not all(math.isfinite(float(v)) for v in p):
+                return None, f"{what} {tuple(p)!r} must be 3 finite numbers [m]"
+        except (TypeError, ValueError):
+            return None, f"{what} {p!r} must be 3 finite numbers [m]"
         cell = ws.cell_of(p)
         if cell is None:
             return None, f"{what} {_fmt(p)} is outside the workspace {_fmt(ws.min)}..{_fmt(ws.max)}"
-        st = self._grid.state_at(cell)
-        if st is CellState.OCCUPIED:
-            owner = self._grid.owner_of(cell)
-            return None, f"{what} {_fmt(p)} is inside an obstacle" + (f" ({owner})" if owner else "")
-        if not math.isfinite(self._cost[cell]):
-            return None, f"{what} {_fmt(p)} is in the take-off layer next to an obstacle; choose ground or a higher altitude"
         return cell, ""
+
+    def why_closed(self, cell: Sequence[int], p: Sequence[float], what: str = "goal") -> str:
+        """Why the robot cannot be in ``cell`` (the point ``p`` [m] asked for), in the operator's words."""
+        return self._refusal(cell, p, what)[0]
+
+    def _near_unknown(self, c: tuple[int, int, int]) -> bool:
+        """Whether unknown (closed) cells lie within the robot's radius (plus a cell) of cell ``c``."""
+        g = self._grid
+        if g.reason is None:
+            return False
+        n = int(math.ceil(max(g.robot.radius, g.robot.flying_radius) / g.workspace.resolution)) + 1
+        lo = [max(0, c[a] - n) for a in range(3)]
+        hi = [min(g.reason.shape[a], c[a] + n + 1) for a in range(3)]
+        if c[2] == 0:
+            hi[2] = max(hi[2], min(g.reason.shape[2], g.walk_layers() + n))
+        return bool(np.any(g.reason[lo[0]:hi[0], lo[1]:hi[1], lo[2]:hi[2]] == Closed.UNKNOWN))
+
+    def _refusal(self, cell: Sequence[int], p: Sequence[float], what: str) -> tuple[str, Vec3 | None]:
+        """The refusal text for a closed cell and, for space not seen yet, where to look from."""
+        g = self._grid
+        c = (int(cell[0]), int(cell[1]), int(cell[2]))
+        why = g.reason_at(c)
+        here = f"{what} {_fmt(p)}"
+        if why is Closed.OBJECT:
+            owner = g.owner_of(c)
+            if owner is None and c[2] == 0 and g.owner is not None:
+                col = g.owner[c[0], c[1], :g.walk_layers()]
+                owner = next((g.owners[int(i)] for i in col if i >= 0), None)
+            return f"{here} is inside an obstacle" + (f" ({owner})" if owner else ""), None
+        if why is Closed.UNKNOWN:
+            vp = self.viewpoint_for(p)
+            if vp is not None:
+                return (f"{here} is not seen yet: look from {_fmt(vp)} m (go there and capture towards it), "
+                        "or Look around"), vp
+            return f"{here} is not seen yet and no seen-free spot the robot can reach sees it: Look around", None
+        if why is Closed.UNLABELLED:
+            return (f"{here} is inside an unlabelled obstacle (the depth map saw a surface there that no mapped "
+                    "object explains)"), None
+        if why is Closed.BENEATH:
+            return (f"{here} is under an object mapped floating ({', '.join(g.floating) or 'unnamed'}): the floor "
+                    "beneath it is closed until a capture sees it free"), None
+        if why is Closed.CLEARANCE:
+            r = g.robot.radius if c[2] == 0 else g.robot.flying_radius
+            centre = self._end_point(c)
+            obj, dist = g.nearest_object(g.workspace.centers(np.array([c]))[0])
+            if obj is not None and dist <= 1e-9:
+                return (f"{here} is under {obj.label} '{obj.id}' (lower than the robot's {g.robot.height:.2f} m "
+                        "height): choose a point further away"), None
+            if obj is not None and dist <= r + 1e-9:
+                flat = c[2] == 0
+                d_goal = float(box_distance(obj, np.array([[float(v) for v in p]]), horizontal=flat)[0])
+                near = "inside" if d_goal <= 1e-9 else f"{d_goal:.2f} m from"
+                return (f"{here} is {near} {obj.label} '{obj.id}' (its cell centre {_fmt(centre)}: {dist:.2f} m); "
+                        f"the robot needs {r:.2f} m around it (its radius): choose a point further away"), None
+            if self._near_unknown(c):
+                vp = self.viewpoint_for(p)
+                look = (f"look from {_fmt(vp)} m (go there and capture towards it), or Look around" if vp is not None
+                        else "Look around")
+                return (f"{here} is within the robot's {r:.2f} m radius of space not seen yet: {look}"), vp
+            return (f"{here} (its cell centre {_fmt(centre)}) is within the robot's {r:.2f} m radius of an unlabelled "
+                    "obstacle (a surface the depth map saw that no mapped object explains)"), None
+        if c[2] == 1:
+            return f"{here} is in the take-off layer next to an obstacle; choose ground or a higher altitude", None
+        return f"{here} cannot be used (closed cell)", None
+
+    def viewpoint_for(self, target: Sequence[float]) -> Vec3 | None:
+        """A reachable seen-free spot (camera position, world [m]) from which ``target`` can be seen,
+        or ``None`` (see :mod:`planner.viewpoint`)."""
+        s = self._grid.workspace.cell_of(self.start)
+        if s is None or not math.isfinite(self._cost[s]):
+            return None
+        return suggest_viewpoint(self._grid, np.isfinite(self._cost), s, target)
+
+    def _end_point(self, cell: Sequence[int]) -> Vec3:
+        pt = path_points(np.array([cell], dtype=np.int64), self._grid)[0]
+        return (float(pt[0]), float(pt[1]), float(pt[2]))
 
     def plan(self, start: Sequence[float], goal: Sequence[float]) -> PlanResult:
         """Plan between two world points without changing the route."""
         s, why = self.check_point(start, "start")
         if s is None:
             return PlanResult(False, why)
-        g, why = self.check_point(goal, "goal")
+        g, why = self._locate(goal, "goal")
         if g is None:
             return PlanResult(False, why)
+        if not math.isfinite(self._cost[g]):
+            text, vp = self._refusal(g, goal, "goal")
+            return PlanResult(False, text, viewpoint=vp)
         t0 = time.perf_counter()
         with self._search_lock:
             res = self._searcher.search(self._cost, s, g, resolution=self._grid.workspace.resolution,
                                         min_cost=self._min_cost, no_corner_cutting=self.no_corner_cutting)
         dt = time.perf_counter() - t0
         if not res.found:
-            return PlanResult(False, f"no path from {_fmt(start)} to {_fmt(goal)}: the goal is cut off by obstacles",
+            hint = ""
+            if self._grid.rule == "closed" and self._grid.reason is not None and \
+                    bool(np.any(self._grid.reason == Closed.UNKNOWN)):
+                hint = " or unseen space (Look around, or plan with unknown space allowed)"
+            return PlanResult(False, f"no path from {_fmt(start)} to {_fmt(goal)}: the goal is cut off by obstacles{hint}",
                               expanded=res.expanded, seconds=dt)
-        return PlanResult(True, f"path of {len(res.path)} cells, cost {res.cost:.2f}", res.path.astype(np.int64),
-                          float(res.cost), int(res.expanded), dt)
+        cells = res.path.astype(np.int64)
+        end = self._end_point(g)
+        unseen, unseen_m = self.unseen_part(cells)
+        msg = f"path of {len(cells)} cells, cost {res.cost:.2f}"
+        moved = math.dist(end, (float(goal[0]), float(goal[1]), float(goal[2])))
+        if moved > 0.01:
+            msg += f"; goal snapped to {_fmt(end)} ({moved:.2f} m away)"
+        if unseen_m > 0:
+            msg += f"; {unseen_m:.2f} m of it through unseen space"
+        return PlanResult(True, msg, cells, float(res.cost), int(res.expanded), dt, end, unseen, unseen_m)
+
+    def unseen_part(self, cells: np.ndarray) -> tuple[np.ndarray | None, float]:
+        """Per path cell whether it is unseen, and the metres of moves ending in unseen cells."""
+        uns = self._grid.unseen
+        if uns is None or len(cells) == 0:
+            return None, 0.0
+        flags = uns[cells[:, 0], cells[:, 1], cells[:, 2]].copy()
+        if len(cells) < 2:
+            return flags, 0.0
+        steps = np.linalg.norm(np.diff(cells, axis=0), axis=1) * self._grid.workspace.resolution
+        return flags, float(steps[flags[1:]].sum())
 
     def propose(self, goal: Sequence[float]) -> PlanResult:
         """Plan a candidate from the last node to ``goal``; on failure the old candidate stays."""
@@ -186,6 +360,8 @@ class Route:
     def set_start(self, start: Sequence[float]) -> None:
         """Move the start (e.g. to the robot's pose); clears the route."""
         self.start = (float(start[0]), float(start[1]), float(start[2]))
+        self._cost = self._own_cost()
+        self._min_cost = _lowest_cost(self._cost)
         self.clear()
 
     def set_grid(self, grid: PlanningGrid, weights: CostWeights | None = None) -> list[str]:
@@ -196,7 +372,7 @@ class Route:
         self._grid = grid
         if weights is not None:
             self._weights = weights
-        self._cost = grid.cost(self._weights)
+        self._cost = self._own_cost()
         self._min_cost = _lowest_cost(self._cost)
         notes: list[str] = []
         for n, seg in enumerate(self.registered):
@@ -228,6 +404,7 @@ class Route:
     def restore(self, data: dict[str, Any]) -> list[str]:
         """Load :meth:`to_dict` output onto the current grid; returns notes like :meth:`set_grid`."""
         self.start = tuple(float(v) for v in data["start"])  # type: ignore[assignment]
+        self._cost = self._own_cost()
         self.registered = [np.asarray(seg, dtype=np.int64).reshape(-1, 3) for seg in data.get("registered", [])]
         shape = np.array(self._grid.state.shape)
         self.registered = [s for s in self.registered if len(s) and np.all((s >= 0) & (s < shape))]

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from pipeline.scene import SceneObject
-from planner.grid import CellState, CostWeights, GridError, Workspace, build_grid
+from planner.grid import CellState, Closed, CostWeights, GridError, Workspace, build_grid
 
 
 def _box(x, y, w, h, l, yaw=0.0, oid="b"):
@@ -49,16 +49,21 @@ def test_yaw_rotates_the_footprint() -> None:
     assert abs(np.ptp(ed[:, 0]) - np.ptp(ed[:, 1])) <= 1
 
 
-def test_margin_makes_a_dangerous_shell() -> None:
+def test_radius_closes_a_shell_and_the_danger_band_lies_beyond() -> None:
+    # the robot's radius is a hard limit (configuration space), the danger band beyond it a cost;
+    # until the known-space rules this shell was only "dangerous" (passable): a robot of radius 0.3 m
+    # could be routed 0.125 m from the box
     ws = Workspace(resolution=0.25)
-    g = build_grid([_box(2.5, 4.0, 0.5, 0.5, 0.5)], ws, margin=0.3)
+    g = build_grid([_box(2.5, 4.0, 0.5, 0.5, 0.5)], ws, margin=0.3, danger_band=0.25)
     occ = g.state == CellState.OCCUPIED
-    dan = g.state == CellState.DANGEROUS
-    assert occ.sum() == 2 * 2 * 2
-    # face neighbours (0.25 m) are dangerous, diagonal ones (0.35 m) are not at margin 0.3
-    # a 2x2x2 cube on the floor: 4 side faces of 2x2 cells plus the 2x2 top (no floor below)
-    assert dan.sum() == 4 * 4 + 4
-    assert not (occ & dan).any()
+    assert int((g.reason == Closed.OBJECT).sum()) == 2 * 2 * 2
+    # the box spans cells i 9..10, j 15..16, k 0..1; every cell centre within 0.3 m is closed:
+    # 4 x 4 on the floor (walking cylinder), on the box's layer and on the layer above (0.125 m up)
+    assert occ.sum() == 3 * 16
+    assert int((g.reason == Closed.CLEARANCE).sum()) == 3 * 16 - 8
+    assert g.state_at((12, 15, 0)) is CellState.DANGEROUS  # 0.375 m from the box: beyond the radius
+    assert g.state_at((13, 15, 0)) is CellState.FREE  # 0.625 m: beyond radius + band
+    assert g.state_at((11, 15, 0)) is CellState.OCCUPIED and g.reason_at((11, 15, 0)) is Closed.CLEARANCE
 
 
 def test_counts_and_costs() -> None:

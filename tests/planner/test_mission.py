@@ -11,6 +11,7 @@ import pytest
 from pipeline.scene import SceneObject
 from planner.grid import Workspace, build_grid
 from planner.mission import Mission, MissionError, mission_from_cells, simplify
+from planner.robot_model import RobotModel
 
 
 def _grid(objs=()):
@@ -49,8 +50,9 @@ def test_path_ending_in_the_air_has_no_landing() -> None:
 def test_takeoff_spot_must_be_free_ground() -> None:
     box = SceneObject("b", "cardboard_box", (0.625, 1.375, 0.25), (0.25, 0.5, 0.25))
     g = _grid([box])
-    # cell (2, 4, 0) is next to the box at (2, 5): dangerous
-    cells = np.array([[2, 3, 0], [2, 4, 0], [2, 5, 2], [2, 6, 0]])
+    # cell (2, 3, 0) is 0.375 m from the box at (2, 5): beyond the 0.3 m radius (cell (2, 4) is
+    # closed), within the danger band: dangerous
+    cells = np.array([[2, 2, 0], [2, 3, 0], [2, 4, 2], [2, 8, 0]])
     with pytest.raises(MissionError, match="take-off spot .* dangerous"):
         mission_from_cells(cells, g)
 
@@ -85,7 +87,8 @@ def test_takeoff_spot_needs_room_above() -> None:
     """A shelf board 0.3-0.45 m above the floor (no danger margin): the floor under it is free,
     but the robot cannot take off there."""
     board = SceneObject("shelf", "shelf", (0.625, 0.875, 0.375), (0.25, 0.15, 0.25))
-    g = build_grid([board], Workspace(resolution=0.25), margin=0.0)
+    # a point robot low enough (one layer) to walk under the board
+    g = build_grid([board], Workspace(resolution=0.25), robot=RobotModel(0.0, 0.25, 0.0))
     assert g.state_at((2, 3, 0)).name == "FREE" and g.state_at((2, 3, 1)).name == "OCCUPIED"
     with pytest.raises(MissionError, match=r"take-off spot \(0.62, 0.88\) has an obstacle right above it"):
         mission_from_cells(np.array([[2, 3, 0], [2, 4, 1], [2, 5, 0]]), g)

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from pipeline.scene import Scene, SceneObject
-from planner.grid import CellState, Workspace, build_grid
+from planner.grid import DANGER_BAND, CellState, Workspace, build_grid
 from planner.object_goal import APPROACH_MAX, ObjectGoalError, Reachability, find_object, footprint_distance, goal_beside
 from planner.route import Route
 from planner.scene_graph import SceneGraphError, build_scene_graph, check_robot, direction
@@ -129,11 +129,13 @@ def test_low_ring_too_tight_to_land_in_is_unreachable_but_a_wide_one_is_reached_
     dog = _obj("dog", "robot_dog", 2.5, 4.0, (0.28, 0.4, 0.645))
     tight = _graph(_ring(0.6, 1.0) + [dog])
     assert _o(tight, "dog")["reach"]["mode"] == "none"
-    wide = _graph(_ring(0.6, 2.5) + [dog])
+    # landing keeps the radius and the danger band (0.35 + 0.25 m) from the walls and the dog: a 2.5 m ring
+    # was wide enough while the radius was only a cost; 3 m is now
+    wide = _graph(_ring(0.6, 3.0) + [dog])
     reach = _o(wide, "dog")["reach"]
     assert reach["mode"] == "fly" and reach["planned"] == "walk+fly"
     land = reach["landing"]
-    assert 2.5 - 1.25 < land[0] < 2.5 + 1.25 and 4.0 - 1.25 < land[1] < 4.0 + 1.25  # inside the ring
+    assert 2.5 - 1.5 < land[0] < 2.5 + 1.5 and 4.0 - 1.5 < land[1] < 4.0 + 1.5  # inside the ring
 
 
 # --- two chairs next to a desk ----------------------------------------------------------------------
@@ -190,7 +192,8 @@ def test_paper_room_summary_and_go_to_robot_dog() -> None:
     assert land.spot[1] > 4.0 + 0.2  # lands behind the line, on the dog's side
     assert grid.state_at(grid.workspace.cell_of(land.spot)) is CellState.FREE
     end = mission.segments[-1].end
-    assert footprint_distance(obj, np.array([end[:2]]))[0] <= 0.5  # beside the dog
+    # beside the dog: the landing spot keeps the radius and the danger band, within half a cell
+    assert footprint_distance(obj, np.array([end[:2]]))[0] <= grid.margin + DANGER_BAND + 0.125
     assert math.dist(end[:2], SEARCH_GOAL[:2]) < 1.5
 
 
@@ -277,9 +280,13 @@ def test_find_object_by_id_label_and_plural() -> None:
 def test_robot_inside_an_obstacle_gives_unknown_reachability() -> None:
     objs = _line_and_dog()
     grid = build_grid(Scene(objects=tuple(objs)))
+    # the robot's own cells are free by definition: a box mapped where it stands no longer strands it
     r = Reachability(grid, (2.5, 3.0, 0.0))  # inside box-2
-    assert r.approach(objs[-1]).mode == "unknown"
-    g = build_scene_graph(Scene(objects=tuple(objs)), (2.5, 3.0, 0.0, 0.0), grid)
+    assert r.approach(objs[-1]).mode in ("walk", "fly")
+    assert "box-2" in r.route.start_warning and "its own cells are taken as free" in r.route.start_warning
+    # a start outside the workspace still cannot be planned from
+    assert Reachability(grid, (2.5, 9.0, 0.0)).approach(objs[-1]).mode == "unknown"
+    g = build_scene_graph(Scene(objects=tuple(objs)), (2.5, 9.0, 0.0, 0.0), grid)
     assert any("reachability unknown" in u for u in g["uncertainties"])
 
 

@@ -199,7 +199,10 @@ def test_robot_cut_off_from_the_floor() -> None:
     assert r.mode == "none" and r.code == "start_cut_off" and "cut off from the floor" in r.reason
 
 
-def test_robot_inside_an_obstacle_is_start_unusable() -> None:
+def test_robot_inside_an_obstacle_walks_out_and_outside_the_workspace_is_start_unusable() -> None:
+    # the robot's own cells are free by definition (a box mapped over it is a mapping error): it walks out
     g = _graph([DOG, _obj("box", "cardboard_box", 2.5, 2.0, (0.6, 0.6, 0.6))], robot=(2.5, 2.0, 0.0, 0.0))
+    assert _o(g, "dog")["reach"]["mode"] == "walk"
+    g = _graph([DOG], robot=(2.5, -1.0, 0.0, 0.0))
     r = _o(g, "dog")["reach"]
-    assert r["mode"] == "unknown" and r["code"] == "start_unusable" and "inside an obstacle" in r["reason"]
+    assert r["mode"] == "unknown" and r["code"] == "start_unusable" and "outside the workspace" in r["reason"]

@@ -228,7 +228,9 @@ def test_an_air_start_path_becomes_fly_land_walk_and_blocked_remainders_are_foun
     moved = build_grid(Scene(objects=_boxes().objects + (SceneObject("crate", "cardboard_box", (2.6, 6.3, 0.3),
                                                                            (0.5, 0.6, 0.5)),)), Workspace(), 0.35)
     why = rules.remaining_blocked(m, 0, moved)
-    assert why is not None and "segment 3 (walk)" in why and "crate" in why
+    # the landing spot (2.625, 5.875) is 0.175 m from the crate: within the robot's radius, so the landing is
+    # blocked before the walk (until the radius became a hard limit, only the walk through the crate was)
+    assert why is not None and "segment 2 (land)" in why and "crate" in why
     assert rules.remaining_blocked(m, 3, moved) is None  # nothing left after the last segment
     assert rules.goals_left([(1.0, 1.0, 0.0), (2.0, 2.0, 0.0)], np.array([[0, 0, 0], [1, 1, 0], [2, 2, 0.0]]),
                             [1, 2], (1.4, 1.4, 0.0)) == [(2.0, 2.0, 0.0)]

@@ -1,0 +1,134 @@
+"""Configuration-space helpers of the planning grid: distances from cell centres to oriented boxes,
+cube-distance dilation of obstacle cells, floating objects.
+
+World frame (z up) [m]. A cell obstacle is the cell's cube; the distance from a cell centre to
+another cell's cube is ``resolution * sqrt(sum(max(|d| - 1/2, 0)^2))`` for the index offset ``d``,
+so :func:`dilate` closes exactly the cells whose centre lies within ``radius`` of an obstacle cell
+(its surface). Object boxes use their exact oriented box (:func:`box_distance`).
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Sequence
+
+import numpy as np
+from scipy import ndimage
+
+from pipeline.scene import SceneObject
+
+FLOAT_TOL = 0.10
+"""An object whose bottom is more than this [m] above the floor, with no object under it within this
+of its bottom, is *floating* (a mapping error or a shelf): the column beneath it is closed unless seen free."""
+
+
+def box_distance(obj: SceneObject, pts: np.ndarray, horizontal: bool = False) -> np.ndarray:
+    """Distance [m] from world points ``(N, 3)`` to ``obj``'s oriented box (0 inside); with
+    ``horizontal`` only x, y count (distance to the box's footprint)."""
+    p = np.asarray(pts, dtype=np.float64).reshape(-1, 3)
+    w, h, l = obj.size
+    c, s = math.cos(obj.yaw), math.sin(obj.yaw)
+    d = p - np.asarray(obj.position)
+    along = np.maximum(np.abs(c * d[:, 0] + s * d[:, 1]) - l / 2, 0.0)
+    across = np.maximum(np.abs(-s * d[:, 0] + c * d[:, 1]) - w / 2, 0.0)
+    if horizontal:
+        return np.hypot(along, across)
+    up = np.maximum(np.abs(d[:, 2]) - h / 2, 0.0)
+    return np.sqrt(along * along + across * across + up * up)
+
+
+def _window(axis: np.ndarray, lo: float, hi: float) -> np.ndarray:
+    return np.nonzero((axis >= lo) & (axis <= hi))[0]
+
+
+def object_distances(objects: Sequence[SceneObject], axes: tuple[np.ndarray, np.ndarray, np.ndarray], reach: float,
+                     z_band: tuple[float, float] | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """Distance [m] from every cell centre to the nearest object and that object's index (-1: none
+    within ``reach`` [m]; distances beyond ``reach`` are ``inf``).
+
+    With ``z_band = (z0, z1)`` the result is 2D ``[nx, ny]``: horizontal distance from the column's
+    centre to the footprints of the objects whose height range overlaps ``z0..z1`` (a walking robot's
+    cylinder); else 3D ``[nx, ny, nz]`` Euclidean distances.
+    """
+    xs, ys, zs = axes
+    shape = (len(xs), len(ys)) if z_band is not None else (len(xs), len(ys), len(zs))
+    dist = np.full(shape, np.inf)
+    near = np.full(shape, -1, dtype=np.int32)
+    for n, obj in enumerate(objects):
+        w, h, l = obj.size
+        cx, cy, cz = obj.position
+        if z_band is not None and not (cz - h / 2 < z_band[1] and cz + h / 2 > z_band[0]):
+            continue
+        rxy = math.hypot(w, l) / 2 + reach
+        ix = _window(xs, cx - rxy, cx + rxy)
+        iy = _window(ys, cy - rxy, cy + rxy)
+        if ix.size == 0 or iy.size == 0:
+            continue
+        if z_band is not None:
+            gx, gy = np.meshgrid(xs[ix], ys[iy], indexing="ij")
+            pts = np.stack([gx.ravel(), gy.ravel(), np.zeros(gx.size)], axis=1)
+            d = box_distance(obj, pts, horizontal=True).reshape(gx.shape)
+            sub = np.ix_(ix, iy)
+        else:
+            iz = _window(zs, cz - h / 2 - reach, cz + h / 2 + reach)
+            if iz.size == 0:
+                continue
+            gx, gy, gz = np.meshgrid(xs[ix], ys[iy], zs[iz], indexing="ij")
+            d = box_distance(obj, np.stack([gx.ravel(), gy.ravel(), gz.ravel()], axis=1)).reshape(gx.shape)
+            sub = np.ix_(ix, iy, iz)
+        cur = dist[sub]
+        better = d < cur
+        dist[sub] = np.where(better, d, cur)
+        near[sub] = np.where(better, n, near[sub])
+    dist[dist > reach + 1e-9] = np.inf
+    return dist, near
+
+
+def cube_ball(radius: float, resolution: float, dims: int) -> np.ndarray:
+    """Structuring element: the index offsets whose cell cube lies within ``radius`` [m] of the
+    centre cell's centre (always the centre itself)."""
+    r = int(math.ceil(radius / resolution + 0.5))
+    rng = np.arange(-r, r + 1)
+    grids = np.meshgrid(*([rng] * dims), indexing="ij")
+    d2 = sum(np.maximum(np.abs(g) - 0.5, 0.0) ** 2 for g in grids)
+    ball = resolution * np.sqrt(d2) <= radius + 1e-9
+    ball[(r,) * dims] = True
+    return ball
+
+
+def dilate(mask: np.ndarray, radius: float, resolution: float) -> np.ndarray:
+    """Cells whose centre lies within ``radius`` [m] of a ``mask`` cell's cube (the mask included)."""
+    if not mask.any():
+        return np.zeros_like(mask, dtype=bool)
+    ball = cube_ball(radius, resolution, mask.ndim)
+    if ball.size == 1:
+        return mask.astype(bool, copy=True)
+    return ndimage.binary_dilation(mask, structure=ball)
+
+
+def floating_objects(objects: Sequence[SceneObject], floor: float, tol: float = FLOAT_TOL) -> list[int]:
+    """Indices of objects whose bottom is more than ``tol`` [m] above ``floor`` with no other object
+    holding it up (another object's top within ``tol`` of its bottom, footprints overlapping)."""
+    out = []
+    for n, o in enumerate(objects):
+        bottom = o.position[2] - o.size[1] / 2
+        if bottom <= floor + tol:
+            continue
+        ro = math.hypot(o.size[0], o.size[2]) / 2
+        held = False
+        for m, p in enumerate(objects):
+            if m == n:
+                continue
+            top = p.position[2] + p.size[1] / 2
+            if abs(top - bottom) > tol and not (p.position[2] - p.size[1] / 2 < bottom < top):
+                continue
+            rp = math.hypot(p.size[0], p.size[2]) / 2
+            if math.dist(o.position[:2], p.position[:2]) < ro + rp:
+                held = True
+                break
+        if not held:
+            out.append(n)
+    return out
+
+
+__all__ = ["FLOAT_TOL", "box_distance", "cube_ball", "dilate", "floating_objects", "object_distances"]

@@ -1,0 +1,103 @@
+"""Where to look from: a reachable seen-free spot from which the camera can see a point not seen yet.
+
+World frame (z up) [m]. Candidates are the passable cells of the planning grid joined to the
+robot's start (face-connected, as the A* moves without corner cutting): on the floor layer the
+camera stands at ``robot.camera_height`` above the floor; in the air at the cell's centre. A
+candidate sees the target when
+
+- the target lies between :data:`MIN_RANGE` and :data:`MAX_RANGE` from the camera,
+- its elevation from the camera is within the camera's half vertical field of view (the robot
+  turns to face it: any heading), and
+- the straight line to it crosses no object, no unlabelled obstacle and no column under a floating
+  object (sampled every half cell; unknown cells on the way do not block: that is what the look
+  is for).
+
+The best candidate is the one with the least ``distance from the robot x layer weight + half the
+distance to the target`` (walking spots preferred: flying costs three times as much, as the
+planner's flight layers do).
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Sequence
+
+import numpy as np
+from scipy import ndimage
+
+from planner.grid import Closed, PlanningGrid
+
+MIN_RANGE = 0.5
+"""Nearest a viewpoint may be to the target [m] (the mapper drops objects closer to the camera)."""
+
+MAX_RANGE = 5.0
+"""Farthest a viewpoint may be from the target [m] (objects far away map poorly)."""
+
+FLIGHT_WEIGHT = 3.0
+"""How much dearer a viewpoint in the air is per metre from the robot."""
+
+MAX_CANDIDATES = 600
+"""Best-scored candidates whose line of sight is checked."""
+
+_BLOCKING = (Closed.OBJECT, Closed.UNLABELLED, Closed.BENEATH)
+
+
+def suggest_viewpoint(grid: PlanningGrid, passable: np.ndarray, start_cell: Sequence[int],
+                      target: Sequence[float]) -> tuple[float, float, float] | None:
+    """The camera position (world [m]) of the best reachable viewpoint that sees ``target``, or
+    ``None`` when no reachable spot does (then: Look around).
+
+    Args:
+        grid: The planning grid.
+        passable: ``bool [nx, ny, nz]``: cells the robot may be in (finite cost).
+        start_cell: The robot's cell (must be passable).
+        target: The point to see (world [m]).
+    """
+    ws = grid.workspace
+    s = tuple(int(v) for v in start_cell)
+    if not passable[s]:
+        return None
+    lab, _ = ndimage.label(passable, ndimage.generate_binary_structure(3, 1))
+    reach = lab == lab[s]
+    idx = np.argwhere(reach)
+    if len(idx) == 0:
+        return None
+    eyes = ws.centers(idx)
+    ground = idx[:, 2] == 0
+    eyes[ground, 2] = ws.floor + grid.robot.camera_height
+    t = np.asarray([float(v) for v in target])
+    d = t - eyes
+    dist = np.linalg.norm(d, axis=1)
+    elev = np.abs(np.arctan2(d[:, 2], np.hypot(d[:, 0], d[:, 1])))
+    ok = (dist >= MIN_RANGE) & (dist <= MAX_RANGE) & (elev <= grid.robot.camera_half_vfov)
+    if not ok.any():
+        return None
+    idx, eyes, dist, ground = idx[ok], eyes[ok], dist[ok], ground[ok]
+    here = ws.centers(np.array([s]))[0]
+    weight = np.where(ground, 1.0, FLIGHT_WEIGHT)
+    score = np.linalg.norm(eyes - here, axis=1) * weight + 0.5 * dist
+    order = np.argsort(score, kind="stable")[:MAX_CANDIDATES]
+    blocking = np.isin(grid.reason, [int(c) for c in _BLOCKING]) if grid.reason is not None else \
+        grid.state == 2
+    tcell = ws.cell_of(t)
+    if tcell is not None:  # the target's own cell may hold what is to be seen
+        blocking = blocking.copy()
+        blocking[tcell] = False
+    # every candidate's line of sight at once: samples every half cell (at most MAX_RANGE long)
+    e = eyes[order]
+    m = int(math.ceil(MAX_RANGE / (ws.resolution / 2.0))) + 1
+    f = np.linspace(0.0, 1.0, m)
+    pts = e[:, None, :] + f[None, :, None] * (t - e)[:, None, :]  # [N, m, 3]
+    cells = np.floor((pts - np.asarray(ws.min)) / ws.resolution).astype(np.int64)
+    hi = np.asarray(ws.shape) - 1
+    inside = np.all((cells >= 0) & (cells <= hi), axis=2)
+    cells = np.clip(cells, 0, hi)
+    blocked = (blocking[cells[..., 0], cells[..., 1], cells[..., 2]] & inside).any(axis=1)
+    free = np.nonzero(~blocked)[0]
+    if len(free) == 0:
+        return None
+    best = e[free[0]]
+    return (float(best[0]), float(best[1]), float(best[2]))
+
+
+__all__ = ["FLIGHT_WEIGHT", "MAX_RANGE", "MIN_RANGE", "suggest_viewpoint"]
