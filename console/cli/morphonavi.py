@@ -102,6 +102,7 @@ def cmd_plan(args: argparse.Namespace) -> int:
     from planner.mission import MissionError
     from planner.route import Route
     from console.cli.object_goal_cli import resolve_stop
+    from console.cli.plan_known import plan_grid
 
     out = Path(args.out)
     if out.is_dir():
@@ -119,12 +120,16 @@ def cmd_plan(args: argparse.Namespace) -> int:
     try:
         ws = Workspace(args.bounds[0], args.bounds[1], args.resolution)
         weights = CostWeights(args.w_ground, args.w_takeoff, args.w_flight, args.w_danger)
-        grid = build_grid(scene, ws, args.margin)
+        grid, rule_lines = plan_grid(args, scene, ws)
     except GridError as exc:
         raise CliError(str(exc)) from None
     c = grid.counts()
     print(f"grid {ws.shape} at {ws.resolution} m: {c['occupied']} occupied, {c['dangerous']} dangerous, {c['free']} free")
+    for line in rule_lines:
+        print(line)
     route = Route(grid, args.start, weights)
+    if route.start_warning:
+        print(f"warning: {route.start_warning}", file=sys.stderr)
     cell, why = route.check_point(args.start, "start")
     if cell is None:
         raise CliError(why)
@@ -205,6 +210,7 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
 
     from console.cli.object_goal_cli import object_stop
+    from console.cli.plan_known import add_known_space_args
 
     p = sub.add_parser("plan", help="plan a multi-stop Aerial-Ground A* path through a scene and write the mission",
                        description="Plan start -> goal1 -> goal2 ... on the scene's grid and write the mission JSON.")
@@ -216,6 +222,7 @@ def build_parser() -> argparse.ArgumentParser:
                    help="a stop beside an object, by id or label (e.g. 'robot dog'); mixes with --goal in order")
     p.add_argument("--out", default="mission.json", help="mission JSON to write (default mission.json)")
     _add_planner_args(p)
+    add_known_space_args(p)
     p.set_defaults(func=cmd_plan)
 
     _add_models_parser(sub)
