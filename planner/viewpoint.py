@@ -40,6 +40,7 @@ MAX_CANDIDATES = 600
 """Best-scored candidates whose line of sight is checked."""
 
 _BLOCKING = (Closed.OBJECT, Closed.UNLABELLED, Closed.BENEATH)
+_FACES = ndimage.generate_binary_structure(3, 1)
 
 
 def suggest_viewpoint(grid: PlanningGrid, passable: np.ndarray, start_cell: Sequence[int],
@@ -57,7 +58,7 @@ def suggest_viewpoint(grid: PlanningGrid, passable: np.ndarray, start_cell: Sequ
     s = tuple(int(v) for v in start_cell)
     if not passable[s]:
         return None
-    lab, _ = ndimage.label(passable, ndimage.generate_binary_structure(3, 1))
+    lab, _ = ndimage.label(passable, _FACES)
     reach = lab == lab[s]
     idx = np.argwhere(reach)
     if len(idx) == 0:
@@ -88,11 +89,12 @@ def suggest_viewpoint(grid: PlanningGrid, passable: np.ndarray, start_cell: Sequ
     m = int(math.ceil(MAX_RANGE / (ws.resolution / 2.0))) + 1
     f = np.linspace(0.0, 1.0, m)
     pts = e[:, None, :] + f[None, :, None] * (t - e)[:, None, :]  # [N, m, 3]
-    cells = np.floor((pts - np.asarray(ws.min)) / ws.resolution).astype(np.int64)
-    hi = np.asarray(ws.shape) - 1
-    inside = np.all((cells >= 0) & (cells <= hi), axis=2)
-    cells = np.clip(cells, 0, hi)
-    blocked = (blocking[cells[..., 0], cells[..., 1], cells[..., 2]] & inside).any(axis=1)
+    cells = np.floor((pts - np.asarray(ws.min)) / ws.resolution).astype(np.int32)
+    nx, ny, nz = ws.shape
+    i, j, k = cells[..., 0], cells[..., 1], cells[..., 2]
+    inside = (i >= 0) & (j >= 0) & (k >= 0) & (i < nx) & (j < ny) & (k < nz)
+    flat = np.where(inside, (i * ny + j) * nz + k, 0)
+    blocked = (blocking.ravel()[flat] & inside).any(axis=1)
     free = np.nonzero(~blocked)[0]
     if len(free) == 0:
         return None
