@@ -22,7 +22,8 @@ Deterministic rules and their thresholds (all module constants):
 - **As seen from the robot** (only with a robot pose): each object's footprint spans an interval
   of bearings. ``A behind B``: the intervals overlap by at least :data:`BEHIND_OVERLAP` of the
   narrower one, A's centre is at least :data:`BEHIND_DEPTH` farther and its nearest corner farther
-  than B's; ``B in_front_of A`` is the inverse. ``A left_of B``: the intervals do not overlap,
+  than B's, and their footprints lie at most :data:`BEHIND_GAP` apart (an object far behind another
+  is not stated "behind" it; visibility still counts it); ``B in_front_of A`` is the inverse. ``A left_of B``: the intervals do not overlap,
   A's lies to the left, and the footprints are at most :data:`SIDE_GAP` apart (``B right_of A``).
 - **Direction** from the robot: the bearing of the centre (robot frame, left positive) in eight
   45-degree sectors: ahead, ahead-left, left, behind-left, behind, ... (:func:`direction`).
@@ -57,10 +58,11 @@ import numpy as np
 
 from pipeline.scene import Scene, SceneObject
 
+from planner.graph_index import behind_mask, footprint_gaps, near_pairs, neighbours, overlapping_bearings
 from planner.grid import PlanningGrid
 from planner.object_goal import Reachability, footprint
 from planner.route import Route
-from planner.view_geometry import RobotView, overlap_fraction, polygon_gap
+from planner.view_geometry import RobotView, overlap_fraction
 
 GRAPH_SCHEMA_VERSION = 2
 """Version 2 added ``placement`` and ``floor_gap`` to objects and ``code`` to ``reach``."""
@@ -70,6 +72,7 @@ SUPPORT_OVERLAP = 0.30  # fraction of the upper footprint
 NEXT_TO_GAP = 0.50  # [m]
 BEHIND_OVERLAP = 0.25  # fraction of the narrower bearing interval
 BEHIND_DEPTH = 0.30  # [m]
+BEHIND_GAP = 3.0  # [m] farthest footprint gap of a stated behind / in_front_of pair
 SIDE_GAP = 1.00  # [m]
 HIDDEN_FRACTION = 0.90
 PARTLY_FRACTION = 0.25
@@ -163,15 +166,17 @@ def _r(v: float, nd: int = 3) -> float:
 
 
 def _support(objs: Sequence[SceneObject], floor: float) -> list[tuple[str | None, float]]:
-    """For each object: ``("floor" | id | None, gap [m])``."""
+    """For each object: ``("floor" | id | None, gap [m])``; only objects whose footprints may overlap
+    are compared (:func:`planner.graph_index.near_pairs`)."""
     out: list[tuple[str | None, float]] = []
-    for a in objs:
+    close = neighbours(len(objs), near_pairs(objs, 0.0))
+    for n, a in enumerate(objs):
         bot = _bottom(a)
         if abs(bot - floor) <= SUPPORT_TOL:
             out.append(("floor", _r(bot - floor)))
             continue
         best: tuple[float, float, str] | None = None
-        for b in objs:
+        for b in (objs[k] for k in close[n]):
             if b is a or abs(_top(b) - bot) > SUPPORT_TOL:
                 continue
             frac = overlap_fraction(a, b)
@@ -287,14 +292,12 @@ def build_scene_graph(scene: Scene, robot: Sequence[float] | None = None, grid: 
     place = [placement(on, _bottom(o) - fl) for o, (on, _) in zip(objs, support)]
     feet = [footprint(o) for o in objs]
     gaps: dict[tuple[int, int], float] = {}
-    for a in range(n):
-        for b in range(a + 1, n):
-            # cheap bound first: centres farther apart than both half-diagonals plus the largest gap
-            ra = math.hypot(objs[a].size[0], objs[a].size[2]) / 2
-            rb = math.hypot(objs[b].size[0], objs[b].size[2]) / 2
-            if math.dist(objs[a].position[:2], objs[b].position[:2]) - ra - rb > max(NEXT_TO_GAP, SIDE_GAP, GROUP_GAP):
-                continue
-            gaps[(a, b)] = polygon_gap(feet[a], feet[b])
+    # only pairs whose centres lie within both half-diagonals plus the largest gap (a KD-tree search)
+    pairs = near_pairs(objs, max(NEXT_TO_GAP, SIDE_GAP, GROUP_GAP, BEHIND_GAP))
+    if pairs:
+        fa = np.array([feet[a] for a, _ in pairs])
+        fb = np.array([feet[b] for _, b in pairs])
+        gaps = dict(zip(pairs, footprint_gaps(fa, fb).tolist()))
     groups = _groups(objs, gaps, support, grid)
     group_of = {m: g["id"] for g in groups for m in g["members"]}
     rel: set[tuple[str, str, str]] = set()
@@ -323,21 +326,27 @@ def build_scene_graph(scene: Scene, robot: Sequence[float] | None = None, grid: 
     records: list[dict[str, Any]] = []
     view = RobotView(objs, pose, BEHIND_DEPTH, BEHIND_OVERLAP) if pose is not None else None
     reach = Reachability(grid, pose[:3], route, objs) if (pose is not None and grid is not None) else None
+    behind_of: list[list[int]] = [[] for _ in range(n)]  # for each a: the b it lies behind
+    tops = np.array([_top(o) for o in objs])
     if view is not None:
+        overlapping = overlapping_bearings(view.lo, view.hi, view.contains)  # behind needs overlapping views
         for a in range(n):
-            for b in range(n):
-                if a == b:
-                    continue
-                if support[a][0] != objs[b].id and support[b][0] != objs[a].id and view.behind(a, b):
+            cand = overlapping[a]
+            for b in (cand[k] for k in np.flatnonzero(behind_mask(view, a, cand))):
+                b = int(b)
+                behind_of[a].append(b)
+                if support[a][0] != objs[b].id and support[b][0] != objs[a].id and \
+                        gaps.get((min(a, b), max(a, b)), math.inf) <= BEHIND_GAP:
                     add(a, "behind", b)
                     add(b, "in_front_of", a)
-                if a < b and gaps.get((a, b), math.inf) <= SIDE_GAP:
-                    if view.left_of(a, b):
-                        add(a, "left_of", b)
-                        add(b, "right_of", a)
-                    elif view.left_of(b, a):
-                        add(b, "left_of", a)
-                        add(a, "right_of", b)
+        for (a, b), gap in gaps.items():
+            if gap <= SIDE_GAP:
+                if view.left_of(a, b):
+                    add(a, "left_of", b)
+                    add(b, "right_of", a)
+                elif view.left_of(b, a):
+                    add(b, "left_of", a)
+                    add(a, "right_of", b)
     uncertain: list[str] = []
     for a, o in enumerate(objs):
         rec: dict[str, Any] = {
@@ -352,8 +361,8 @@ def build_scene_graph(scene: Scene, robot: Sequence[float] | None = None, grid: 
             rec["from_robot"] = {"distance": _r(view.centre[a], 2), "nearest": _r(view.near[a], 2),
                                  "bearing_deg": _r(math.degrees(view.bearing[a]), 1),
                                  "direction": direction(view.bearing[a])}
-            cover = [b for b in range(n) if b != a and _top(objs[b]) >= _top(o) - 1e-6
-                     and support[a][0] != objs[b].id and view.behind(a, b)]
+            cb = np.asarray(behind_of[a], dtype=np.int64)
+            cover = [int(b) for b in cb[tops[cb] >= tops[a] - 1e-6] if support[a][0] != objs[b].id]
             frac = view.hidden_fraction(a, cover)
             rec["visibility"] = ("hidden" if frac >= HIDDEN_FRACTION else
                                  "partly_hidden" if frac >= PARTLY_FRACTION else "visible")

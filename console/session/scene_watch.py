@@ -11,6 +11,20 @@ reported like a malformed file. Reading and checking run on the watcher's thread
 ``on_scene`` is called, so they never hold the session's lock; the session then refuses
 implausible objects (:meth:`console.session.session.Session.spawn`).
 
+Every file is treated by its kind (:mod:`pipeline.file_kind`): a console session, a mission, a
+scene graph, a camera file, a recording or a photo dropped in is reported once as what it is and
+which command reads it, never read as a scene. A symbolic link that leads nowhere, or a loop of
+links, is reported once too. A file is known by its name and its identity (inode, modification
+time, size), so a file rewritten in place or replaced by a rename is read again;
+``on_scene``'s receiver decides what a re-read replaces (the console drops the objects the file's
+previous version added, :meth:`console.app.ConsoleApp._spawn_file`). Positions and poses are
+range-checked like a command-line pose (:func:`pipeline.file_kind.check_scene_ranges`), and a
+zero camera quaternion is named by its field.
+
+:meth:`SceneWatcher.stop` ends the polling between files; at interpreter exit (SIGTERM, Ctrl-C) the
+pass under way is waited for (up to :data:`EXIT_WAIT_S`) instead of the thread being killed inside a
+library call.
+
 Objects may be given in the ``world``, ``robot`` or ``camera`` frame (see :mod:`pipeline.scene`);
 robot- and camera-frame objects are moved into the world frame with the pose of the capture they
 name (``source.capture``), else with the robot's current pose.
@@ -18,8 +32,10 @@ name (``source.capture``), else with the robot's current pose.
 
 from __future__ import annotations
 
+import atexit
 import logging
 import math
+import os
 import threading
 import time
 from dataclasses import dataclass, replace
@@ -29,6 +45,7 @@ from typing import Callable
 import numpy as np
 
 from pipeline.camera.geometry import CameraMount, Pose, camera_pose_in_world
+from pipeline.file_kind import KINDS, check_scene_ranges, kind_of_json, sniff, wrong_kind
 from pipeline.scene import Capture, Scene, SceneError, SceneObject, scene_from_dict
 from pipeline.scene_json import parse_json_text
 
@@ -37,6 +54,9 @@ MAX_FILE_BYTES = 5_000_000
 
 MAX_FILE_OBJECTS = 2_000
 """Most objects one watched scene file may hold."""
+
+EXIT_WAIT_S = 60.0
+"""Longest wait at interpreter exit for the file being handled [s]."""
 
 log = logging.getLogger(__name__)
 
@@ -127,6 +147,11 @@ def objects_to_world(
 class _Seen:
     mtime_ns: int
     size: int
+    inode: int = 0
+
+
+OTHER_KINDS = ("recording", "camera_toml", "catalog", "photo")
+"""Kinds of non-JSON files the watched folder names when dropped in (anything else is left alone)."""
 
 
 class SceneWatcher:
@@ -164,6 +189,7 @@ class SceneWatcher:
         self._max_bytes = max_bytes
         self._max_objects = max_objects
         self._seen: dict[str, _Seen] = {}
+        self._told: dict[str, str] = {}  # name -> the notice already given for it (links, other kinds)
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
         if not spawn_existing:
@@ -178,21 +204,60 @@ class SceneWatcher:
             log.error("cannot list the watched scene folder %s: %s", self.folder, exc)
             return out
         for p in entries:
-            if p.suffix.lower() != ".json" or p.name.startswith("."):
+            if p.name.startswith("."):
                 continue
             try:
                 st = p.stat()
-            except OSError:
+            except OSError as exc:
+                self._tell(p.name, self._broken_link(p, exc))
                 continue
-            if p.is_file():
-                out[p] = _Seen(st.st_mtime_ns, st.st_size)
+            if not p.is_file():
+                continue
+            if p.suffix.lower() != ".json":
+                self._other_file(p, st)
+                continue
+            self._told.pop(p.name, None)
+            out[p] = _Seen(st.st_mtime_ns, st.st_size, st.st_ino)
         return out
+
+    def _tell(self, name: str, message: str) -> None:
+        """Report ``message`` about ``name`` once (again only when it changes)."""
+        if message and self._told.get(name) != message:
+            self._told[name] = message
+            self._on_error(name, message)
+
+    @staticmethod
+    def _broken_link(p: Path, exc: OSError) -> str:
+        import errno
+
+        if not p.is_symlink():
+            return ""
+        try:
+            target = str(p.readlink())
+        except OSError:
+            target = "?"
+        if exc.errno == errno.ELOOP:
+            return f"a loop of symbolic links (it points at {target}, which leads back to it): not read"
+        return f"a symbolic link to {target}, which does not exist: not read"
+
+    def _other_file(self, p: Path, st: os.stat_result) -> None:
+        """A non-JSON file: named once when it is a kind MorphoNavi knows (a camera file, a recording ...)."""
+        key = f"{p.name}:{st.st_mtime_ns}:{st.st_size}"
+        if self._told.get(f"\0{p.name}") == key:
+            return
+        self._told[f"\0{p.name}"] = key
+        kind = sniff(p)
+        if kind in OTHER_KINDS:
+            self._tell(p.name, f"{wrong_kind('', p.name, kind, 'scene')}; the watched folder reads scene "
+                               "JSON files only: not read")
 
     def poll(self) -> list[str]:
         """One pass over the folder; returns the names read in this pass (good or bad)."""
         done: list[str] = []
         now = time.time_ns()
         for path, sig in sorted(self._listing().items()):
+            if self._stop.is_set():
+                break
             if self._seen.get(path.name) == sig:
                 continue
             if (now - sig.mtime_ns) / 1e9 < self._settle:
@@ -225,11 +290,20 @@ class SceneWatcher:
         if len(text.encode("utf-8")) > self._max_bytes:  # grew since it was listed
             raise SceneError("", f"over the {self._max_bytes / 1e6:g} MB limit for a scene file: not read")
         data = parse_json_text(text)
+        kind = kind_of_json(data)
+        if kind not in ("scene", "json"):
+            raise SceneError("", f"{wrong_kind('', path.name, kind, 'scene')}; nothing was added")
+        if kind == "json":
+            keys = ", ".join(list(data)[:6]) if isinstance(data, dict) else type(data).__name__
+            raise SceneError("", f"not {KINDS['scene'].what}: JSON of no MorphoNavi kind ({keys}); a scene file "
+                                 "has \"version\" and \"objects\": nothing was added")
         objs = data.get("objects") if isinstance(data, dict) else None
         if isinstance(objs, list) and len(objs) > self._max_objects:
             raise SceneError("objects", f"{len(objs)} objects is over the limit of {self._max_objects} "
                                         "for one scene file: nothing was added")
-        return scene_from_dict(data)
+        scene = scene_from_dict(data)
+        check_scene_ranges(scene)
+        return scene
 
     def start(self) -> None:
         """Poll in a daemon thread until :meth:`stop`."""
@@ -246,8 +320,19 @@ class SceneWatcher:
 
         self._thread = threading.Thread(target=loop, name="scene-watch", daemon=True)
         self._thread.start()
+        # at exit, end the pass under way before the interpreter stops daemon threads: stopped inside a
+        # library call, the thread aborted the process ("FATAL: exception not rethrown", SIGTERM during a drop)
+        atexit.register(self._stop_at_exit)
+
+    def _stop_at_exit(self) -> None:
+        self._stop.set()
+        thread = self._thread
+        if thread is not None:
+            thread.join(timeout=EXIT_WAIT_S)
 
     def stop(self) -> None:
+        """Stop polling (between files) and wait up to 2 s for the thread."""
+        atexit.unregister(self._stop_at_exit)
         self._stop.set()
         if self._thread is not None:
             self._thread.join(timeout=2.0)

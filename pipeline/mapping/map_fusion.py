@@ -210,6 +210,42 @@ def _cost(obs: SceneObject, r_obs: np.ndarray, obj: SceneObject, p_obj: np.ndarr
     return math.inf
 
 
+def _candidates(obs: Sequence[SceneObject], covs: Sequence[np.ndarray], objects: Sequence[SceneObject],
+                p_objs: Sequence[np.ndarray], cfg: FusionConfig, captures: dict[str, Capture]) -> np.ndarray:
+    """``[len(obs), len(objects)]`` mask of the pairs :func:`_cost` may find finite, from bounds alone
+    (numpy over all pairs, so the exact cost runs on a few instead of every pair: a second drop of a
+    1900-object file took 184 s): the squared Mahalanobis distance is at least ``|d|^2 / (lmax(P) +
+    lmax(R))``, and footprints overlap only when their centres lie within both half-diagonals. A pinned
+    object is also tried where it was seen before, as :func:`_cost` does."""
+    pts, lams, owner = [], [], []
+    for j, (m, p) in enumerate(zip(objects, p_objs)):
+        points = [(m.position, p)]
+        if m.is_pinned:
+            points += [(s.position, _cov(s)) for s in _history(m, captures) if s.capture]
+        for pos, cov in points:
+            pts.append(pos)
+            lams.append(float(np.linalg.eigvalsh(cov).max()))
+            owner.append(j)
+    po = np.array([o.position for o in obs], dtype=np.float64)
+    pm = np.array(pts, dtype=np.float64)
+    lam_o = np.array([float(np.linalg.eigvalsh(r).max()) for r in covs])
+    lam_m = np.array(lams)
+    near = np.zeros((len(obs), len(pts)), dtype=bool)
+    for i0 in range(0, len(obs), 256):  # in blocks: [256, n_points, 3] at most
+        d = pm[None, :, :] - po[i0:i0 + 256, None, :]
+        near[i0:i0 + 256] = (d * d).sum(axis=2) <= cfg.gate * (lam_o[i0:i0 + 256, None] + lam_m[None, :]) \
+            * (1 + 1e-9) + 1e-12
+    gate = np.zeros((len(obs), len(objects)), dtype=bool)
+    np.logical_or.at(gate.T, np.array(owner), near.T)
+    if cfg.min_overlap <= 0:
+        return np.ones_like(gate)
+    rad_o = np.array([math.hypot(o.size[0], o.size[2]) / 2 for o in obs])
+    rad_m = np.array([math.hypot(m.size[0], m.size[2]) / 2 for m in objects])
+    pc = np.array([m.position for m in objects], dtype=np.float64)
+    dh = np.hypot(pc[None, :, 0] - po[:, None, 0], pc[None, :, 1] - po[:, None, 1])
+    return gate | (dh <= rad_o[:, None] + rad_m[None, :] + 1e-9)
+
+
 def _assign(obs: Sequence[SceneObject], covs: Sequence[np.ndarray], objects: Sequence[SceneObject],
             cfg: FusionConfig, captures: dict[str, Capture], keys: dict[str, str],
             taken: set[int]) -> dict[int, int]:
@@ -219,8 +255,10 @@ def _assign(obs: Sequence[SceneObject], covs: Sequence[np.ndarray], objects: Seq
     big = 1e9
     cost = np.full((len(obs), len(objects)), big)
     p_objs = [_map_cov(o, captures) for o in objects]
+    cand = _candidates(obs, covs, objects, p_objs, cfg, captures)
     for i, (o, r) in enumerate(zip(obs, covs)):
-        for j, m in enumerate(objects):
+        for j in np.flatnonzero(cand[i]).tolist():
+            m = objects[j]
             if j in taken or keys[o.label] != keys[m.label]:
                 continue
             c = _cost(o, r, m, p_objs[j], cfg, captures)
