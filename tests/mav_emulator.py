@@ -159,6 +159,7 @@ class ArduCopterEmulator(CopterPhysics, VehicleEvents):
         self.signing_passphrase: str | None = None  # signing required with this key (GCS_Signing.cpp)
         self.ekf_fault_until = 0.0  # monotonic [s]: EKF_STATUS_REPORT reports a glitch until then
         self.physics_step = PHYSICS_STEP
+        self.after_heartbeat: Any = None  # called (no arguments) right after each autopilot heartbeat is sent
         self.params = {"FS_GCS_ENABLE": 1.0, "FS_GCS_TIMEOUT": 5.0, "FS_EKF_ACTION": 1.0, "RTL_ALT": 1500.0}
         self.record = Record()
         self.lock = threading.RLock()
@@ -320,7 +321,8 @@ class ArduCopterEmulator(CopterPhysics, VehicleEvents):
         now = time.monotonic()
         for m, t in queued:
             if m.get_type() in ("COMMAND_LONG", "SET_MODE", "SET_POSITION_TARGET_LOCAL_NED"):
-                self.record.late_commands.append((m.get_type(), now - t))
+                name = m.get_type() + (f" {int(m.command)}" if m.get_type() == "COMMAND_LONG" else "")
+                self.record.late_commands.append((name, now - t))
             self._handle(m)
 
     def _ms(self) -> int:
@@ -332,6 +334,8 @@ class ArduCopterEmulator(CopterPhysics, VehicleEvents):
             status = mav.MAV_STATE_ACTIVE if self.armed else mav.MAV_STATE_STANDBY
             self._send("heartbeat_send", mav.MAV_TYPE_QUADROTOR, mav.MAV_AUTOPILOT_ARDUPILOTMEGA, base,
                        MODES[self.mode], status)
+            if self.after_heartbeat is not None:
+                self.after_heartbeat()
         for comp, mtype, ap in self.components:
             self._send_as(self.system, comp, "heartbeat_send", mtype, ap, 0, 0, mav.MAV_STATE_ACTIVE)
             self._send_as(self.system, comp, "attitude_send", self._ms(), 0.0, 0.3, 1.0, 0.0, 0.0, 0.0)

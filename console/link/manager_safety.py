@@ -140,12 +140,12 @@ class SafetyMixin:
 
     def _rebooted(self, epoch: int, wait: float = 1.0) -> bool:
         """Whether a mode the console did not command is the robot's reboot (its first heartbeats are in
-        the boot mode before its clock shows the reboot): waits up to ``wait`` [s] for the link epoch to
-        change or the claim to be released."""
+        the boot mode before its clock shows the reboot): waits up to ``wait`` [s] for a state sample
+        with a new link epoch."""
         end = time.monotonic() + wait
         while time.monotonic() < end:
             st = self.link.latest_state()
-            if (st is not None and st.link_epoch != epoch) or not self._vehicle_control():
+            if st is not None and st.link_epoch != epoch:  # the state sample that says so (and why)
                 return True
             time.sleep(self.poll)
         return False

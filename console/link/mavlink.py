@@ -87,10 +87,12 @@ class MavlinkLink(RobotLink):
         self.mount = mount
         self._counters: dict[str, int] = {"retries": 0, "nacks": 0}
         self.telemetry = Telemetry(config.source_system, config.heartbeat_timeout, config.autopilot_component,
-                                   config.max_range, config.max_speed, on_epoch=self._on_epoch)
+                                   config.max_range, config.max_speed, on_epoch=self._on_epoch,
+                                   vehicle_max_speed=config.vehicle_max_speed)
         self.transport = MavTransport(url, config.source_system, config.source_component, self.telemetry.handle,
                                       tlog, on_reconnect=self.telemetry.new_epoch,
-                                      silence=self.telemetry.heartbeat_age, gate_after=config.heartbeat_timeout,
+                                      silence=self.telemetry.silence,
+                                      gate_after=min(config.heartbeat_timeout, config.pose_timeout),
                                       signing_key=config.signing_key, on_timesync=self._timesync_sent)
         self.telemetry.signing_key_set = config.signing_key is not None
         self.commander = Commander(self.transport, self.telemetry, config.ned, self._target, config.ack_timeout,

@@ -3,7 +3,8 @@
 :class:`LinkQuality` sees every packet of the vehicle before it is used (on the receive thread):
 
 - **duplicates**: a packet whose (system, component, ``seq``, message id, checksum) was received in the
-  last ``dup_window`` seconds, less than one ``seq`` wrap (250 packets of that source) ago, is an exact copy (two telemetry links, a radio's retransmission): it is
+  last ``dup_window`` seconds, less than one ``seq`` wrap (250 packets of that source) ago, is an
+  exact copy (two telemetry links, a radio's retransmission): it is
   dropped and counted, so a late copy never looks like new telemetry or a reboot;
 - **loss**: per (system, component) the MAVLink ``seq`` should count up by one; a forward gap of ``n``
   (``n < 128``) is ``n`` lost packets; loss is the fraction lost over the last ``window`` seconds;

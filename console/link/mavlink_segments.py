@@ -7,8 +7,9 @@ speed, landed state, readiness):
 
 - walking: ground-motion targets (:class:`~console.link.mavlink_config.GroundMotion`) to each waypoint;
 - take-off: wait (bounded) until the vehicle is ready, GUIDED, arm, ``MAV_CMD_NAV_TAKEOFF``, climb;
-- flight: the configured speeds (``MAV_CMD_DO_CHANGE_SPEED``), then ``SET_POSITION_TARGET_LOCAL_NED``
-  re-sent at the set-point rate until within tolerance;
+- flight: ``SET_POSITION_TARGET_LOCAL_NED`` re-sent at the set-point rate until within tolerance; the
+  speeds (``MAV_CMD_DO_CHANGE_SPEED``) go out once position control has started and again after every
+  controller change, and the measured speed is watched (:mod:`~console.link.mavlink_speed`);
 - landing: above the spot, *stopped* there (``STILL_DWELL`` of still samples), then LAND until
   ``EXTENDED_SYS_STATE`` says on ground;
 - turn: yaw in place, the position target at where the vehicle is with the turn's yaw (ground or
@@ -31,12 +32,20 @@ import numpy as np
 from planner.mission import SegmentKind
 
 from console.link.base import LinkError, LinkTimeout, RunStatus, SegmentRun
-from console.link.mavlink_commands import SPEED_CLIMB, SPEED_DESCENT, SPEED_GROUND, Commander, Stopped
+from console.link.mavlink_commands import Commander, Stopped
 from console.link.mavlink_config import MavlinkConfig
+from console.link.mavlink_authority import VehicleInControl
+from console.link.mavlink_speed import SpeedGuard
 from console.link.mavlink_state import landed
 from console.link.mavlink_telemetry import LANDED_IN_AIR, LANDED_TAKEOFF, Telemetry
 
 log = logging.getLogger(__name__)
+
+CONFIRM_GAP_S = 0.2
+"""A mission's LAND waits for a heartbeat received at least this long [s] after it was decided."""
+
+QUIET_S = 0.3
+"""No target is sent while the vehicle has sent nothing at all for this long [s]."""
 
 STILL_DWELL = 0.3
 """How long [s] the vehicle must stay still over a spot before a landing starts there."""
@@ -62,6 +71,7 @@ class SegmentExecutor:
         self.config = config
         self.telemetry = telemetry
         self.commander = commander
+        self.speed_guard = SpeedGuard(config, telemetry, commander)
 
     def airborne(self) -> bool:
         """Whether the vehicle is in the air (from its landed state and height)."""
@@ -126,9 +136,14 @@ class SegmentExecutor:
         while True:
             if cancel.is_set():
                 raise Stopped()
+            with self.telemetry.lock:
+                taken = self.telemetry.authority.describe()
+            if taken:  # the vehicle chose another mode: nothing more is sent or decided here
+                raise VehicleInControl(taken)
             here = self.pos()
             if here is not None:
-                if each is not None:
+                # a vehicle silent for QUIET_S gets no target: on TCP it would queue and arrive late
+                if each is not None and self.telemetry.silence() <= QUIET_S:
                     each(here)
                 if done(here):
                     return
@@ -137,14 +152,10 @@ class SegmentExecutor:
             cancel.wait(period)
 
     def _speeds(self, ground: bool, cancel: threading.Event) -> None:
-        """Command the configured speeds (MAV_CMD_DO_CHANGE_SPEED) for what comes next."""
-        cfg = self.config
-        if ground:
-            self.commander.change_speed(SPEED_GROUND, cfg.ground.speed, cancel, cfg.ground.target_component)
-            return
-        self.commander.change_speed(SPEED_GROUND, cfg.fly_speed, cancel)
-        self.commander.change_speed(SPEED_CLIMB, cfg.climb_rate, cancel)
-        self.commander.change_speed(SPEED_DESCENT, cfg.descent_rate, cancel)
+        """Velocity targets carry their speed (sent here too); position targets get theirs once position
+        control has started (:meth:`SpeedGuard.before_target`: ArduCopter resets the speed then)."""
+        if ground and self.config.ground.command == "velocity":
+            self.speed_guard.send_speeds(True, cancel)
 
     def _go_to(self, run: SegmentRun, cancel: threading.Event, target: np.ndarray, index: int, ground: bool,
                progress: Callable[[float], float], stop: bool = False) -> None:
@@ -170,7 +181,9 @@ class SegmentExecutor:
                 v = d / n * min(cfg.ground.speed, n * cfg.setpoint_rate) if n > 1e-6 else np.zeros(3)
                 self.commander.send_velocity_target((float(v[0]), float(v[1]), 0.0), yaw, comp)
             else:
+                self.speed_guard.before_target(here, ground, yaw, comp, cancel)
                 self.commander.send_position_target((float(target[0]), float(target[1]), float(target[2])), yaw, comp)
+                self.speed_guard.watch(ground, cancel)
             run.update(progress(max(0.0, dist0 - remaining(here))), index)
 
         still_since: list[float] = []  # when the vehicle was first seen there and still (stop only)
@@ -297,7 +310,7 @@ class SegmentExecutor:
         # always confirmed stopped over the spot (STILL_DWELL of still samples), not on one sample
         z = float(here[2]) if here[2] > above[2] + cfg.altitude_tolerance else float(above[2])  # never descend first
         self._go_to(run, cancel, np.array([above[0], above[1], z]), 0, False, lambda d: 0.2, stop=True)
-        self.land(run, cancel)
+        self.land(run, cancel, confirm_mode=True)
 
     def _do_turn(self, run: SegmentRun, cancel: threading.Event) -> None:
         """Yaw in place to the segment's heading (world frame [rad]).
@@ -340,8 +353,24 @@ class SegmentExecutor:
         self._wait(lambda here: error() <= YAW_TOLERANCE,
                    self._motion_timeout(err0, TURN_RATE_EXPECTED), f"heading {math.degrees(yaw):.0f} deg", cancel, send)
 
-    def land(self, run: SegmentRun, cancel: threading.Event) -> None:
+    def land(self, run: SegmentRun, cancel: threading.Event, confirm_mode: bool = False) -> None:
+        """LAND until on the ground; with ``confirm_mode`` (a mission's landing, not the failsafe's) only
+        after a heartbeat received from now on shows the vehicle still in the console's mode (ArduPilot
+        heartbeats come at 1 Hz: an RTL it began a moment ago is not replaced by our LAND)."""
         cfg = self.config
+        if confirm_mode:
+            # a heartbeat received in the same instant may have left the vehicle before a mode change:
+            # only one received CONFIRM_GAP_S after the decision counts
+            since = time.monotonic() + CONFIRM_GAP_S
+            with self.telemetry.lock:
+                heard = self.telemetry.lock.wait_for(lambda: self.telemetry.v.last_heartbeat > since,
+                                                     cfg.heartbeat_timeout + CONFIRM_GAP_S)
+            if cancel.is_set():
+                raise Stopped()
+            if not heard:
+                raise LinkTimeout(f"no heartbeat within {cfg.heartbeat_timeout:g} s to confirm the vehicle's mode "
+                                  "before LAND")
+            self.commander.check_control("LAND")
         self.commander.set_mode(cfg.land_mode, cancel)
         here = self.pos()
         z0 = float(here[2]) if here is not None else cfg.floor + 1.0

@@ -122,6 +122,7 @@ class Vehicle:
     low_boot_ms: int | None = None  # a candidate earlier clock (reboot or late copies)
     low_count: int = 0
     silence_end: float = -math.inf  # monotonic [s] a heartbeat silence ended
+    last_rx: float = -math.inf  # monotonic [s] of the vehicle's last message of any kind
     origin: tuple[float, float, float] | None = None  # first GPS_GLOBAL_ORIGIN (lat deg, lon deg, alt m)
     origin_now: tuple[float, float, float] | None = None
     stream_time: dict[str, float] = field(default_factory=dict)  # message type -> monotonic [s]
@@ -151,11 +152,12 @@ class Telemetry:
         max_range: Largest plausible |NED coordinate| [m].
         max_speed: Largest plausible speed component [m/s].
         on_epoch: Called (outside the lock) with the reason after a reboot / reconnect.
+        vehicle_max_speed: Fastest the vehicle really moves [m/s] (faster position steps are jumps).
     """
 
     def __init__(self, source_system: int, heartbeat_timeout: float, autopilot_component: int | None = 1,
                  max_range: float = 10_000.0, max_speed: float = 50.0,
-                 on_epoch: Callable[[str], None] | None = None) -> None:
+                 on_epoch: Callable[[str], None] | None = None, vehicle_max_speed: float = 15.0) -> None:
         self.source_system = source_system
         self.heartbeat_timeout = heartbeat_timeout
         self.autopilot_component = autopilot_component
@@ -168,7 +170,7 @@ class Telemetry:
         self.quality = LinkQuality()
         self.timesync_sent: dict[int, float] = {}  # our TIMESYNC ts1 [ns] -> monotonic [s] sent
         self.authority = ModeAuthority(lambda: [(s.time, s.severity, s.text) for s in self.v.statustext])
-        self.estimator = EstimatorWatch(max_speed)
+        self.estimator = EstimatorWatch(vehicle_max_speed)
         self.signing_key_set = False
 
     # --- identity --------------------------------------------------------------------------------
@@ -224,8 +226,8 @@ class Telemetry:
             v.silence_end = now
         v.last_heartbeat = now
         v.custom_mode = int(msg.custom_mode)
-        from console.link.mavlink_transport import mavutil
-        name = mavutil().mode_mapping_acm.get(v.custom_mode, f"mode {v.custom_mode}")
+        from pymavlink import mavutil  # on first use, as console.link.mavlink_transport.mavutil()
+        name = mavutil.mode_mapping_acm.get(v.custom_mode, f"mode {v.custom_mode}")
         if self.authority.observe(name) is not None:
             self._add_line(4, f"WARNING: link: the vehicle switched to {name} by itself: the console "
                               "sends nothing until the operator takes control")
@@ -249,6 +251,8 @@ class Telemetry:
                 v.warnings["signing"] = ("the vehicle signs its messages (MAVLink 2 signing): it ignores unsigned "
                                          "commands; signing required: set a key with --mavlink-key")
                 self._add_line(4, "WARNING: link: " + v.warnings["signing"])
+            if v.system is not None and msg.get_srcSystem() == v.system:
+                v.last_rx = now
             if kind == "HEARTBEAT":
                 epoch_reason = self._heartbeat(msg, now)
             elif v.system is not None and msg.get_srcSystem() == v.system:
@@ -416,6 +420,11 @@ class Telemetry:
         """Seconds since the last ``kind`` message of the vehicle (valid or not; ``inf`` if never)."""
         with self.lock:
             return time.monotonic() - self.v.stream_time.get(kind, -math.inf)
+
+    def silence(self) -> float:
+        """Seconds since the vehicle's last message of any kind (``inf`` before the first)."""
+        with self.lock:
+            return time.monotonic() - self.v.last_rx
 
     def heartbeat_age(self) -> float:
         with self.lock:

@@ -119,8 +119,9 @@ def use_mavlink2() -> None:
 class MavTransport:
     """The pymavlink connection with its receive and GCS-heartbeat threads.
 
-    On a stream transport (TCP) nothing but our heartbeat is written while the vehicle has been silent
-    longer than ``gate_after``: what is written into a blocked TCP connection waits there and reaches
+    On a stream transport (TCP) nothing but our heartbeat is written while the vehicle has sent nothing
+    at all for longer than ``gate_after`` (the link's ``min(heartbeat_timeout, pose_timeout)``): what is
+    written into a blocked TCP connection waits there and reaches
     the vehicle late (seconds to minutes), so such a send raises :class:`LinkError` instead. With a
     ``signing_key`` every message is signed (MAVLink 2); unsigned or wrongly signed messages from the
     vehicle are still read (and counted: ``bad_signatures``). Once a second the heartbeat thread also
@@ -365,6 +366,8 @@ class StreamKeeper:
     def check(self) -> None:
         """One round: re-request stale streams, read origin and failsafe parameters."""
         now = time.monotonic()
+        if self.tel.silence() > min(0.25, self.stale_after / 2):
+            return  # only a vehicle heard just now is asked (a silent one on TCP would get it late); next round
         if self.rate > 0:
             stale = [k for k in TRACKED if self.tel.stream_age(k) > self.stale_after
                      and now - self._last.get(k, -math.inf) >= self.retry_period]

@@ -106,6 +106,9 @@ class RobotSnapshot:
         ready: Whether the robot can take off now (position estimate, EKF, pre-arm checks).
         readiness: Why it is not ready (``""`` when ready).
         warnings: Standing warnings about the link or the vehicle, for the robot panel.
+        link_quality: The link's quality figure (``"link 97 % (3 % lost, RTT 12 ms)"``), ``""`` if none.
+        vehicle_control: ``""`` while the console may command the robot, else why not (``"vehicle took
+            control: mode RTL (...)"``).
     """
 
     pose: Pose
@@ -122,6 +125,8 @@ class RobotSnapshot:
     ready: bool = True
     readiness: str = ""
     warnings: tuple[str, ...] = ()
+    link_quality: str = ""
+    vehicle_control: str = ""
 
     def __post_init__(self) -> None:
         age = self.pose_age
@@ -152,7 +157,9 @@ def trust_fields(state: Any) -> dict[str, Any]:
     valid = bool(getattr(state, "position_valid", True))
     return {"position_valid": valid, "pose_age": age, "ready": bool(getattr(state, "ready", True)),
             "readiness": str(getattr(state, "readiness", "") or ""),
-            "warnings": tuple(str(w) for w in (getattr(state, "warnings", ()) or ()))}
+            "warnings": tuple(str(w) for w in (getattr(state, "warnings", ()) or ())),
+            "link_quality": str(getattr(state, "link_quality", "") or ""),
+            "vehicle_control": str(getattr(state, "vehicle_control", "") or "")}
 
 
 def robot_snapshot(state: Any) -> RobotSnapshot:

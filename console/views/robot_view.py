@@ -130,6 +130,8 @@ def position_text(r: RobotSnapshot) -> str:
 def trust_text(r: RobotSnapshot) -> str:
     """Readiness (while not ready) and the link's standing warnings, as panel lines (HTML)."""
     out = ""
+    if r.vehicle_control:  # the vehicle flies its own mode: the console sends nothing
+        out += f"<br><b style='color:#d62728'>{html.escape(r.vehicle_control)}</b>"
     if not r.ready:
         out += ("<br><span style='color:#b35c00'><b>not ready to take off</b>: "
                 f"{html.escape(r.readiness or 'the vehicle says so')}</span>")
@@ -156,9 +158,10 @@ def status_text(r: RobotSnapshot | None, link_name: str) -> str:
     age = time.time() - r.stamp
     stale = f" · <b style='color:#d62728'>{age:.0f} s old</b>" if age > 2.0 else ""
     detail = f"<br>{html.escape(shown_detail)}" if shown_detail else ""
+    quality = f" · {html.escape(r.link_quality)}" if r.link_quality else ""
     said = "".join(f"<br><span style='color:{_message_color(t)}'>{html.escape(t)}</span>"
                    for _, t in r.messages[-MESSAGES_SHOWN:])
-    return (f"<small>robot <b>{html.escape(link_name)}</b> · {health} · {html.escape(mode_text(r.mode))} · {armed} · "
+    return (f"<small>robot <b>{html.escape(link_name)}</b> · {health}{quality} · {html.escape(mode_text(r.mode))} · {armed} · "
             f"{battery}{stale}<br>{position_text(r)}{detail}{trust_text(r)}{said}</small>")
 
 
@@ -244,7 +247,7 @@ class RobotView:
         unknown, and refresh the status line."""
         now = time.monotonic()
         status = r.position_status
-        key = (status, r.healthy, r.ready, r.readiness, r.warnings, r.mode, r.armed)
+        key = (status, r.healthy, r.ready, r.readiness, r.warnings, r.mode, r.armed, r.vehicle_control)
         with self._lock:
             if not force and key == self._drawn_key and now - self._last < MIN_INTERVAL:
                 return

@@ -145,3 +145,32 @@ def test_the_consoles_own_mode_changes_are_not_a_takeover() -> None:
         assert manager.wait(90.0) is MissionStatus.DONE, events(manager)
         assert not any("took control" in m for m in events(manager)), events(manager)
         assert link.latest_state().vehicle_control == ""
+
+
+def test_a_mode_the_vehicle_took_while_hovering_over_the_landing_spot_is_not_replaced_by_the_consoles_land() -> None:
+    """The issue's case (an RTL replaced by the console's LAND 0.45 s later), with ArduPilot's 1 Hz heartbeat
+    and a mode that keeps the vehicle still (the pilot's LOITER; an RTL climbs, so the console never sees
+    the vehicle still and never decides LAND): the mode changes right after a heartbeat, as the vehicle
+    settles over the spot; the console's LAND waits for a heartbeat received after it decided, sees
+    LOITER and sends nothing."""
+    with vehicle(config(fly_speed=1.0, heartbeat_timeout=3.0), heartbeat_rate=1.0) as (link, emu):
+        manager = mission_manager(link, failsafe_after=3.0, failsafe_hold=0.5)
+        manager.start(Mission((MissionSegment(TAKEOFF, ((2.5, 0.7, 0.0), (2.5, 0.7, 1.5))),
+                               MissionSegment(FLY, ((2.5, 0.7, 1.5), (2.5, 2.7, 1.5))),
+                               MissionSegment(LAND, ((2.5, 2.7, 1.5), (2.5, 2.7, 0.0)))), **BOUNDS))
+        spot = (2.0, 0.0)  # NED of world (2.5, 2.7)
+        switched: list[float] = []
+
+        def loiter_right_after_a_heartbeat() -> None:  # the next heartbeat, 1 s later, is the first to say so
+            if not switched and emu.mode == "GUIDED" and manager.progress().segment == 2 \
+                    and abs(emu.pos[0] - spot[0]) < 0.3:
+                switched.append(time.monotonic())
+                emu.other_gcs_set_mode("LOITER")
+
+        emu.after_heartbeat = loiter_right_after_a_heartbeat
+        assert eventually(lambda: bool(switched), 90.0), (emu.pos, events(manager))
+        took = switched[0]
+        assert manager.wait(30.0) is MissionStatus.PAUSED, events(manager)
+        assert "vehicle took control: mode LOITER" in manager.progress().message, events(manager)
+        _, modes = _console_commands_after(emu, took)
+        assert "LAND" not in modes and emu.mode == "LOITER", (modes, emu.record.mode_sources)
