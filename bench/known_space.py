@@ -1,0 +1,347 @@
+"""Benchmark: today's planner (point robot with a soft margin, unseen space free) against the
+known-space, robot-sized planner, on seeded random rooms and the paper's room.
+
+Each room (world frame, the paper's 5 x 8 x 3 m workspace at 0.25 m, the room shell beyond it) holds
+a line or wall of cardboard boxes across it (wall to wall, with gaps narrower and wider than the
+robot, or with an open end), furniture in front of and behind it, and objects beside or behind the
+robot's start (outside the first view). The robot stands at ``y = 0.7`` facing +y. Perception is
+the simulator's ground truth: the render's depth with 2 % per-pixel noise (known space updated with
+a 3 % depth sigma), the objects visible in at least 200 pixels mapped with 8 cm / 3 degree noise;
+the ``miss10`` run drops each visible object with probability 0.1. Two capture protocols: ``one``
+capture from the start, and ``look`` (look around: 6 headings, 60 degrees apart). Goals: three floor
+spots behind the line, free in the true room for the robot's radius.
+
+Per planner, counted over every (room, run, protocol, goal):
+
+- ``routes``: plans found; ``hit body`` / ``hit radius``: routes whose robot (a 0.25 m body, the
+  simulator's; or the 0.35 m planning radius) overlaps a true object anywhere along the route
+  (sampled every 5 cm; walking: a cylinder up to 0.45 m, flying: a sphere);
+- ``unseen``: routes through cells no capture saw free (walking cells: the column up to the robot's
+  height), and their metres;
+- ``refused: viewpoint / look around / other`` (the new planner's refusals);
+- ``plan ms``: median click-to-plan (goal check + A*) on the grid, and for the new planner the
+  grid's build time per capture; ``update ms``: known-space update per 640 x 480 capture.
+
+Ratios are new / today in the same run. Run from the repository root::
+
+    .venv/bin/python bench/known_space.py                 # 50 rooms + the paper's room
+    .venv/bin/python bench/known_space.py --rooms 10      # quicker
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import os
+import sys
+import time
+from dataclasses import dataclass, field
+
+_HERE = os.path.dirname(os.path.abspath(__file__))
+# bench/planner.py would shadow the planner package: keep this folder off sys.path
+sys.path[:] = [p for p in sys.path if os.path.abspath(p or os.getcwd()) != _HERE]
+sys.path.insert(0, os.path.dirname(_HERE))
+
+import numpy as np  # noqa: E402
+from scipy import ndimage  # noqa: E402
+
+from console.link.render import SceneRenderer  # noqa: E402
+from console.link.sim_camera import visible_objects  # noqa: E402
+from console.link.sim_config import DEFAULT_INTRINSICS, DEFAULT_MOUNT  # noqa: E402
+from console.link.world import DEFAULT_START, ROOM_MAX, ROOM_MIN, box_wall, paper_room  # noqa: E402
+from pipeline.camera.geometry import Pose, camera_pose_in_world  # noqa: E402
+from pipeline.mapping.known_space import KnownSpace, KnownState  # noqa: E402
+from pipeline.mapping.known_space_update import DepthNoise, capture_update  # noqa: E402
+from pipeline.scene import Scene, SceneObject, Source  # noqa: E402
+from planner.cspace import box_distance  # noqa: E402
+from planner.grid import CellState, PlanningGrid, Workspace, box_cells, build_grid  # noqa: E402
+from planner.route import Route  # noqa: E402
+
+WS = Workspace()
+RADIUS = 0.35
+BODY = 0.25
+HEIGHT = 0.45
+FURNITURE = [("desk", (0.7, 0.75, 1.3)), ("office_chair", (0.6, 1.0, 0.6)), ("suitcase", (0.45, 0.65, 0.27)),
+             ("compressor", (0.35, 0.5, 0.45)), ("office_cabinet", (0.42, 1.85, 0.8)), ("robot_dog", (0.28, 0.4, 0.645)),
+             ("cardboard_box", (0.45, 0.4, 0.45))]
+
+
+def legacy_grid(objs: list[SceneObject], ws: Workspace, margin: float) -> PlanningGrid:
+    """Today's grid (before known space): boxes occupied, free cells within ``margin`` of them only dangerous."""
+    occ = np.zeros(ws.shape, bool)
+    owner = np.full(ws.shape, -1, np.int32)
+    for n, o in enumerate(objs):
+        c = box_cells(o, ws)
+        owner[c & ~occ] = n
+        occ |= c
+    state = np.zeros(ws.shape, np.uint8)
+    if occ.any():
+        dist = ndimage.distance_transform_edt(~occ, sampling=ws.resolution)
+        state[(dist <= margin + 1e-9) & ~occ] = CellState.DANGEROUS
+    state[occ] = CellState.OCCUPIED
+    return PlanningGrid(ws, state, margin, tuple(o.id for o in objs), owner)
+
+
+def _obj(oid: str, label: str, x: float, y: float, size, yaw: float = 0.0, z0: float = 0.0) -> SceneObject:
+    return SceneObject(oid, label, (x, y, z0 + size[1] / 2), tuple(size), yaw, "world", source=Source(method="ground_truth"))
+
+
+@dataclass
+class Room:
+    name: str
+    scene: Scene
+    start: tuple[float, float]
+    line_y: float
+    goals: list[tuple[float, float, float]] = field(default_factory=list)
+
+
+def _clear_of(objs: list[SceneObject], xy: tuple[float, float], r: float) -> bool:
+    p = np.array([[xy[0], xy[1], 0.0]])
+    return all(box_distance(o, p, horizontal=True)[0] > r for o in objs)
+
+
+def random_room(rng: np.random.Generator, n: int) -> Room:
+    line_y = float(rng.uniform(3.3, 4.7))
+    layers = int(rng.integers(1, 4))
+    kind = str(rng.choice(["wall", "gaps", "open_end"]))
+    boxes = box_wall(line_y, 0.0, 5.0, layers)
+    if kind == "gaps":
+        for g in range(int(rng.integers(1, 3))):
+            width = float(rng.choice([0.3, 0.5, 0.6, 0.9, 1.2]))
+            cx = float(rng.uniform(0.8, 4.2))
+            boxes = [b for b in boxes if abs(b.position[0] - cx) > width / 2 + 0.225]
+    elif kind == "open_end":
+        cut = float(rng.uniform(0.8, 1.6))
+        left = bool(rng.integers(0, 2))
+        boxes = [b for b in boxes if (b.position[0] > cut if left else b.position[0] < 5.0 - cut)]
+    sx = float(rng.uniform(1.5, 3.5))
+    objs = list(boxes)
+    placed = 0
+    tries = 0
+    want = int(rng.integers(3, 7))
+    while placed < want and tries < 200:
+        tries += 1
+        label, size = FURNITURE[int(rng.integers(0, len(FURNITURE)))]
+        zone = rng.integers(0, 3)  # 0 in front, 1 behind, 2 beside / behind the robot (outside the first view)
+        if zone == 0:
+            x, y = rng.uniform(0.4, 4.6), rng.uniform(1.6, line_y - 0.8)
+        elif zone == 1:
+            x, y = rng.uniform(0.4, 4.6), rng.uniform(line_y + 0.8, 7.6)
+        else:
+            x, y = rng.choice([rng.uniform(0.3, max(0.4, sx - 1.3)), rng.uniform(min(4.6, sx + 1.3), 4.7)]), \
+                rng.uniform(0.2, 1.5)
+        o = _obj(f"{label}-{placed}", label, float(x), float(y), size, float(rng.uniform(-math.pi, math.pi)))
+        if not _clear_of(objs, (float(x), float(y)), max(size) / 2 + 0.2) or math.dist((x, y), (sx, 0.7)) < 1.0:
+            continue
+        objs.append(o)
+        placed += 1
+    room = Room(f"room{n:02d}-{kind}-{layers}", Scene(objects=tuple(objs)), (sx, 0.7), line_y)
+    room.goals = goals_behind(rng, objs, line_y)
+    return room
+
+
+def goals_behind(rng: np.random.Generator, objs: list[SceneObject], line_y: float, k: int = 3) -> list[tuple[float, float, float]]:
+    out: list[tuple[float, float, float]] = []
+    for _ in range(400):
+        if len(out) == k:
+            break
+        x, y = float(rng.uniform(0.5, 4.5)), float(rng.uniform(line_y + 0.9, 7.6))
+        cell = WS.cell_of((x, y, 0.0))
+        c = WS.centers(np.array([cell]))[0]
+        if _clear_of(objs, (c[0], c[1]), RADIUS + 0.05):
+            out.append((float(c[0]), float(c[1]), 0.0))
+    return out
+
+
+def paper() -> Room:
+    scene = paper_room()
+    x, y, _ = DEFAULT_START.translation
+    rng = np.random.default_rng(1234)
+    room = Room("paper", scene, (float(x), float(y)), 4.0)
+    room.goals = [(2.625, 5.625, 0.0)] + goals_behind(rng, list(scene.objects), 4.0, 2)
+    return room
+
+
+@dataclass
+class Views:
+    """One room's captures: per heading the depth (noisy), camera pose and visible true object ids."""
+
+    depth: list[np.ndarray]
+    cams: list[Pose]
+    seen: list[set[str]]
+
+
+def capture(room: Room, renderer: SceneRenderer, rng: np.random.Generator, headings: int = 6) -> Views:
+    views = Views([], [], [])
+    for h in range(headings):
+        pose = Pose.from_xyz_yaw(room.start[0], room.start[1], 0.0, math.pi / 2 + h * 2 * math.pi / headings)
+        cam = camera_pose_in_world(pose, DEFAULT_MOUNT)
+        r = renderer.render(cam, DEFAULT_INTRINSICS)
+        noisy = (r.depth * (1.0 + 0.02 * rng.standard_normal(r.depth.shape))).astype(np.float32)
+        views.depth.append(noisy)
+        views.cams.append(cam)
+        views.seen.append({v.id for v in visible_objects(r, 200)})
+    return views
+
+
+def mapped_objects(room: Room, ids: set[str], rng: np.random.Generator, miss: float) -> list[SceneObject]:
+    out = []
+    for o in room.scene.objects:
+        if o.id not in ids or rng.random() < miss:
+            continue
+        dx, dy = rng.normal(0.0, 0.08, 2)
+        out.append(SceneObject(o.id, o.label, (o.position[0] + dx, o.position[1] + dy, o.position[2]), o.size,
+                               o.yaw + float(rng.normal(0.0, math.radians(3))), "world"))
+    return out
+
+
+def densify(pts: np.ndarray, cells: np.ndarray, step: float = 0.05) -> tuple[np.ndarray, np.ndarray]:
+    out, ground = [pts[0]], [cells[0, 2] == 0]
+    for a, b, ca, cb in zip(pts[:-1], pts[1:], cells[:-1], cells[1:]):
+        n = max(1, int(math.ceil(float(np.linalg.norm(b - a)) / step)))
+        for i in range(1, n + 1):
+            out.append(a + (b - a) * i / n)
+            ground.append(bool(ca[2] == 0 and cb[2] == 0))
+    return np.array(out), np.array(ground)
+
+
+def hits(room: Room, pts: np.ndarray, ground: np.ndarray, r: float) -> bool:
+    for o in room.scene.objects:
+        lo, hi = o.position[2] - o.size[1] / 2, o.position[2] + o.size[1] / 2
+        if ground.any() and lo < HEIGHT and hi > 0.0:
+            if np.any(box_distance(o, pts[ground], horizontal=True) < r - 1e-9):
+                return True
+        if (~ground).any() and np.any(box_distance(o, pts[~ground]) < r - 1e-9):
+            return True
+    return False
+
+
+def unseen_metres(cells: np.ndarray, seen: np.ndarray) -> float:
+    """Metres of moves ending in a cell not seen free (walking: its column up to the robot's height)."""
+    kh = int(math.ceil(HEIGHT / WS.resolution))
+    ok = np.where(cells[:, 2] == 0, seen[cells[:, 0], cells[:, 1], :kh].all(axis=1),
+                  seen[cells[:, 0], cells[:, 1], cells[:, 2]])
+    steps = np.linalg.norm(np.diff(cells, axis=0), axis=1) * WS.resolution
+    return float(steps[~ok[1:]].sum())
+
+
+@dataclass
+class Tally:
+    plans: int = 0
+    routes: int = 0
+    hit_body: int = 0
+    hit_radius: int = 0
+    unseen_routes: int = 0
+    unseen_m: float = 0.0
+    refused_viewpoint: int = 0
+    refused_look: int = 0
+    refused_other: int = 0
+    plan_ms: list[float] = field(default_factory=list)
+    build_ms: list[float] = field(default_factory=list)
+    examples: list[str] = field(default_factory=list)
+
+
+def run_case(room: Room, objs: list[SceneObject], ks: KnownSpace, tallies: dict[str, Tally]) -> None:
+    seen = ks.state() == KnownState.FREE
+    start = (room.start[0], room.start[1], 0.0)
+    t0 = time.perf_counter()
+    grids = {"today": legacy_grid(objs, WS, RADIUS)}
+    tallies["today"].build_ms.append((time.perf_counter() - t0) * 1e3)
+    t0 = time.perf_counter()
+    grids["new"] = build_grid(objs, WS, RADIUS, known=ks)
+    tallies["new"].build_ms.append((time.perf_counter() - t0) * 1e3)
+    for name, grid in grids.items():
+        tl = tallies[name]
+        route = Route(grid, start)
+        for goal in room.goals:
+            tl.plans += 1
+            t0 = time.perf_counter()
+            res = route.plan(start, goal)
+            tl.plan_ms.append((time.perf_counter() - t0) * 1e3)
+            if not res.ok:
+                if res.viewpoint is not None:
+                    tl.refused_viewpoint += 1
+                elif "Look around" in res.message:
+                    tl.refused_look += 1
+                else:
+                    tl.refused_other += 1
+                    if len(tl.examples) < 3:
+                        tl.examples.append(f"{room.name} {goal}: {res.message}")
+                continue
+            tl.routes += 1
+            pts = res.points(grid)
+            dense, ground = densify(pts, res.cells)
+            tl.hit_body += hits(room, dense, ground, BODY)
+            tl.hit_radius += hits(room, dense, ground, RADIUS)
+            m = unseen_metres(res.cells, seen)
+            tl.unseen_routes += m > 0
+            tl.unseen_m += m
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0], formatter_class=argparse.RawDescriptionHelpFormatter,
+                                 epilog="Counts and times per planner; ratios are new / today, measured in the same run.")
+    ap.add_argument("--rooms", type=int, default=50, help="random rooms besides the paper's (default 50)")
+    ap.add_argument("--seed", type=int, default=19, help="random seed (default 19)")
+    args = ap.parse_args(argv)
+    if args.rooms < 0:
+        ap.error("--rooms must be >= 0")
+    rng = np.random.default_rng(args.seed)
+    rooms = [paper()] + [random_room(rng, n) for n in range(args.rooms)]
+    keys = [(p, r) for p in ("one", "look") for r in ("noise", "miss10")]
+    tallies = {k: {"today": Tally(), "new": Tally()} for k in keys}
+    update_ms: list[float] = []
+    t_all = time.perf_counter()
+    # compile the numba kernels outside the timings
+    capture_update(KnownSpace.empty(WS.min, WS.max, WS.resolution), np.ones((480, 640), np.float32),
+                   DEFAULT_INTRINSICS, camera_pose_in_world(DEFAULT_START, DEFAULT_MOUNT))
+    for room in rooms:
+        renderer = SceneRenderer(room.scene, (ROOM_MIN, ROOM_MAX))
+        views = capture(room, renderer, rng)
+        body = (room.start[0], room.start[1], 0.0)
+        for proto in ("one", "look"):
+            n = 1 if proto == "one" else len(views.depth)
+            ks = KnownSpace.empty(WS.min, WS.max, WS.resolution)
+            for d, cam in zip(views.depth[:n], views.cams[:n]):
+                up = capture_update(ks, d, DEFAULT_INTRINSICS, cam, noise=DepthNoise(relative=0.03))
+                update_ms.append(up.seconds * 1e3)
+                ks = up.space
+            ks = ks.with_free_body(body, RADIUS, HEIGHT)
+            ids = set().union(*views.seen[:n])
+            for run, miss in (("noise", 0.0), ("miss10", 0.1)):
+                run_case(room, mapped_objects(room, ids, rng, miss), ks, tallies[(proto, run)])
+    total = time.perf_counter() - t_all
+    print(f"{len(rooms)} rooms (the paper's + {args.rooms} random, seed {args.seed}), "
+          f"{sum(len(r.goals) for r in rooms)} goals behind the line, workspace {WS.shape} at {WS.resolution} m")
+    head = (f"{'protocol':8} {'run':7} {'planner':7} {'plans':>5} {'routes':>6} {'hit body':>8} {'hit radius':>10} "
+            f"{'unseen':>6} {'unseen m':>8} {'ref vp':>6} {'ref look':>8} {'ref other':>9} {'plan ms':>7} {'build ms':>8}")
+    print(head)
+    print("-" * len(head))
+    for (proto, run), pair in tallies.items():
+        for name, t in pair.items():
+            print(f"{proto:8} {run:7} {name:7} {t.plans:5d} {t.routes:6d} {t.hit_body:8d} {t.hit_radius:10d} "
+                  f"{t.unseen_routes:6d} {t.unseen_m:8.1f} {t.refused_viewpoint:6d} {t.refused_look:8d} "
+                  f"{t.refused_other:9d} {np.median(t.plan_ms):7.2f} {np.median(t.build_ms):8.2f}")
+    allp = {n: [v for pair in tallies.values() for v in pair[n].plan_ms] for n in ("today", "new")}
+    allb = {n: [v for pair in tallies.values() for v in pair[n].build_ms] for n in ("today", "new")}
+    print(f"click-to-plan median: today {np.median(allp['today']):.2f} ms, new {np.median(allp['new']):.2f} ms "
+          f"(ratio {np.median(allp['new']) / np.median(allp['today']):.2f}); 95th percentile today "
+          f"{np.percentile(allp['today'], 95):.2f} ms, new {np.percentile(allp['new'], 95):.2f} ms")
+    print(f"grid build per capture median: today {np.median(allb['today']):.1f} ms, new {np.median(allb['new']):.1f} ms "
+          f"(ratio {np.median(allb['new']) / np.median(allb['today']):.2f})")
+    print(f"known-space update per 640x480 capture: median {np.median(update_ms):.1f} ms, max {np.max(update_ms):.1f} ms "
+          f"({len(update_ms)} updates)")
+    for (proto, run), pair in tallies.items():
+        for ex in pair["new"].examples[:1]:
+            print(f"example other refusal ({proto}, {run}): {ex}")
+    new_hits = sum(p["new"].hit_body for p in tallies.values())
+    new_close = sum(p["new"].hit_radius for p in tallies.values())
+    new_unseen = sum(p["new"].unseen_m for p in tallies.values())
+    print(f"targets: new planner 0 colliding routes (body contact: {new_hits}, "
+          f"{'met' if new_hits == 0 else 'MISSED'}; {new_close} within the 0.35 m radius of a true object), "
+          f"0 unseen metres ({new_unseen:.1f}, {'met' if new_unseen == 0 else 'MISSED'}); total {total:.0f} s")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
