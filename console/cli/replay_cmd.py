@@ -22,7 +22,8 @@ def add_replay_parser(subparsers: argparse._SubParsersAction) -> argparse.Argume
     p.add_argument("--host", default="127.0.0.1", help="interface to listen on (default 127.0.0.1)")
     p.add_argument("--port", type=_port, default=8080, help="TCP port (default 8080; 0 = any free port)")
     p.add_argument("--salvage", action="store_true",
-                   help="read a recording that was not finished (the console was killed) up to where it ends")
+                   help="read a recording that was not finished (the console was killed) up to where it ends, "
+                        "or a damaged one chunk by chunk: replay what is readable and say what was lost")
     p.set_defaults(func=cmd_replay)
     return p
 
@@ -59,7 +60,7 @@ def cmd_replay(args: argparse.Namespace) -> int:
     app = open_replay(args.file, args.host, args.port, args.salvage)
     names = " ".join(str(f) for f in args.file)
     if app.recording.salvaged:
-        print(f"{names}: not finished; salvaged {app.recording.duration:.1f} s", flush=True)
+        print(f"{names}: salvaged: {app.recording.salvage_note}; replaying {app.recording.duration:.1f} s", flush=True)
     print(f"MorphoNavi replay of {names}: open {app.url} in a browser (Ctrl-C to stop)", flush=True)
     app.serve_forever()
     return 0

@@ -4,7 +4,9 @@
 shown) and answers :meth:`Recording.state_at` with what the console showed at that time: scene,
 route, mission, last capture, robot, mission progress and the recent log lines. A missing file, a
 file that is not MCAP, a truncated or corrupt one, or an MCAP file that is not a MorphoNavi
-recording raises :class:`ReplayError` with what is wrong.
+recording raises :class:`ReplayError` with what is wrong. With ``salvage`` a truncated or corrupt
+file is read chunk by chunk instead (:mod:`console.recording.salvage`): what is readable is replayed
+and :attr:`Recording.salvage_note` says what was lost (``2 of 40 chunks unreadable: 12.3 s of 95.0 s lost``).
 
 Times are nanoseconds since the epoch (the MCAP log times); frames as in :mod:`console.recording.recording_schemas`.
 """
@@ -59,29 +61,6 @@ class ReplayState:
     run: RunStatus
     log: tuple[tuple[int, str], ...]
     versions: dict[str, int]
-
-
-def _salvaged(f: Any) -> list[tuple[Any, Any, Any]]:
-    """``(schema, channel, message)`` of every whole record of a file cut short, in log-time order."""
-    from mcap.records import Channel, Message, Schema
-    from mcap.stream_reader import StreamReader
-
-    schemas: dict[int, Any] = {}
-    channels: dict[int, Any] = {}
-    out: list[tuple[Any, Any, Any]] = []
-    try:
-        for r in StreamReader(f).records:
-            if isinstance(r, Schema):
-                schemas[r.id] = r
-            elif isinstance(r, Channel):
-                channels[r.id] = r
-            elif isinstance(r, Message) and r.channel_id in channels:
-                ch = channels[r.channel_id]
-                out.append((schemas.get(ch.schema_id), ch, r))
-    except Exception:  # the cut: a record (or a chunk) that ends early; what came before is kept
-        pass
-    out.sort(key=lambda m: m[2].log_time)
-    return out
 
 
 class _Track:
@@ -148,8 +127,9 @@ class Recording:
     Args:
         path: The ``.mcap`` file, or the parts of one rotated run in order (``run.mcap``,
             ``run-002.mcap``, ...), read as one timeline.
-        salvage: Read a file without its footer (a console that was killed) up to where it ends,
-            instead of refusing it; :attr:`salvaged` tells whether that happened.
+        salvage: Read a file without its footer (a console that was killed) up to where it ends, and
+            a corrupt file chunk by chunk, skipping the chunks that cannot be read, instead of refusing
+            it; :attr:`salvaged` tells whether that happened and :attr:`salvage_note` what was lost.
     """
 
     def __init__(self, path: str | Path | Sequence[str | Path], salvage: bool = False) -> None:
@@ -158,6 +138,8 @@ class Recording:
             raise ReplayError("no recording given")
         self.salvage = salvage
         self.salvaged = False
+        self.salvage_reports: list[tuple[Path, Any]] = []  # (file, SalvageReport) of every salvaged part
+        self.lost_settings = False  # the session's settings were in a lost chunk: default workspace shown
         self._tracks: dict[str, _Track] = {}
         self.info: ReplayInfo | None = None
         self._capture_cache: tuple[int, CaptureRecord] | None = None
@@ -168,11 +150,28 @@ class Recording:
             order = sorted(range(len(tr.times)), key=tr.times.__getitem__)
             tr.times, tr.items = [tr.times[i] for i in order], [tr.items[i] for i in order]
         if self.info is None:
-            if self.salvaged:
+            if self.salvaged and any(tr.times for tr in self._tracks.values()):
+                # the chunk holding the session's settings is lost, the rest is not: replay it in the
+                # console's default workspace, and say so
+                self.info = ReplayInfo(Workspace(), 0.35, (2.5, 0.7, 0.0))
+                self.lost_settings = True
+            elif self.salvaged:
                 raise ReplayError(f"{self.path}: truncated before its first MorphoNavi message: nothing to salvage")
-            raise ReplayError(f"{self.path}: not a MorphoNavi recording (no {rs.SESSION_INFO} message)")
+            else:
+                raise ReplayError(f"{self.path}: not a MorphoNavi recording (no {rs.SESSION_INFO} message)")
         all_times = [t for tr in self._tracks.values() for t in tr.times]
         self.start, self.end = min(all_times), max(all_times)
+
+    @property
+    def salvage_note(self) -> str:
+        """What a salvage read lost, for the operator (``""`` when nothing was salvaged)."""
+        if len(self.salvage_reports) == 1:
+            note = self.salvage_reports[0][1].summary()
+        else:
+            note = "; ".join(f"{p.name}: {r.summary()}" for p, r in self.salvage_reports)
+        if self.lost_settings:
+            note += "; the session's settings were lost with them: shown in the default workspace"
+        return note
 
     @property
     def duration(self) -> float:
@@ -215,20 +214,36 @@ class Recording:
                                               "its last two seconds")
                         raise ReplayError(f"{p}: truncated (no MCAP footer): the recording was not finished, e.g. the "
                                           "console was killed or the disk filled up; --salvage reads what it holds")
-                    f.seek(0)
-                    self.salvaged = True
-                    self._read_messages(_salvaged(f))
+                    self._salvage(f)
                 else:
                     from mcap.reader import make_reader
 
                     f.seek(0)
-                    self._read_messages(make_reader(f).iter_messages(log_time_order=True))
+                    try:  # read whole before use: a corrupt chunk half-way must not leave half a timeline
+                        # chunk CRCs checked: a flipped byte that LZ4 decodes silently is still caught
+                        messages = list(make_reader(f, validate_crcs=True).iter_messages(log_time_order=True))
+                    except Exception as exc:  # the mcap reader's errors for a corrupt file have no common base
+                        if not self.salvage:
+                            raise ReplayError(f"{p}: corrupt MCAP file ({type(exc).__name__}: {exc}); --salvage "
+                                              "replays what is readable and says what was lost") from None
+                        self._salvage(f)
+                    else:
+                        self._read_messages(messages)
         except ReplayError:
             raise
         except OSError as exc:
             raise ReplayError(f"{p}: cannot read: {exc.strerror or exc}") from None
         except Exception as exc:  # the mcap reader's errors for a corrupt file have no common base
             raise ReplayError(f"{p}: corrupt MCAP file ({type(exc).__name__}: {exc})") from None
+
+    def _salvage(self, f: Any) -> None:
+        """Read ``f`` chunk by chunk, keeping what is readable (:func:`console.recording.salvage.salvage`)."""
+        from console.recording.salvage import salvage
+
+        messages, report = salvage(f)
+        self.salvaged = True
+        self.salvage_reports.append((self.path, report))
+        self._read_messages(messages)
 
     def _read_messages(self, messages: Any) -> None:
         from mcap_protobuf.decoder import DecoderFactory
