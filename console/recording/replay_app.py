@@ -20,7 +20,7 @@ import viser
 
 from console.app import BRAND_RGB, RIGHT_PANEL_PX, check_listenable
 from console.views.capture_view import CaptureView
-from console.views.client_notice import page_style
+from console.views.client_notice import install_tab_rules, page_style
 from console.views.grid_view import GridView
 from console.views.mission_view import MissionView
 from console.views.objects_view import ObjectsView
@@ -160,11 +160,12 @@ class ReplayApp:
         server.initial_camera.look_at = (cx + 0.1, cy - 1.1, 0.0)
         server.initial_camera.up = (0.0, 0.0, 1.0)
         gui.add_html(page_style(RIGHT_PANEL_PX))
+        install_tab_rules(server)
         with gui.add_folder("Replay"):
             names = ", ".join(p.name for p in rec.paths)
             gui.add_markdown(f"<small>Recording <code>{html.escape(names)}</code>: "
                              f"{rec.duration:.1f} s, read-only"
-                             f"{' (salvaged: the file was not finished)' if rec.salvaged else ''}</small>")
+                             f"{' (salvaged: ' + html.escape(rec.salvage_note) + ')' if rec.salvaged else ''}</small>")
             slider = gui.add_slider("Time [s]", 0.0, max(math.ceil(rec.duration * 10) / 10, 0.1), 0.1, 0.0,
                                     hint="Seconds from the start of the recording")
             self._play_btn = gui.add_button("Play", icon=viser.Icon.PLAYER_PLAY, color="green")

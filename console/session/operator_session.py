@@ -22,6 +22,7 @@ import numpy as np
 from planner.mission import Mission, MissionError
 from planner.route import path_points
 
+from console.session import mission_rules
 from console.session import operator_state as rules
 from console.session.session_types import Notice, RunStatus, SessionError, Vec3
 from console.session.topics import MISSION, ROUTE, RUN
@@ -273,8 +274,9 @@ class OperatorRules:
         """The one action for a route that does not start at the robot: plan every registered goal
         again from the robot's pose (and rebuild the mission if there was one); returns a message."""
         with self._lock:  # type: ignore[attr-defined]
-            if self._run.active:  # type: ignore[attr-defined]
-                raise SessionError("a mission is under way: abort it before re-planning")
+            why = mission_rules.blocker("replan", self._run.state)  # type: ignore[attr-defined]
+            if why is not None:
+                raise SessionError(why)
             r = self._robot  # type: ignore[attr-defined]
             if r is None:
                 raise SessionError("no state from the robot yet: cannot plan from it")
@@ -314,8 +316,9 @@ class OperatorRules:
         """Add a landing straight below the end of a mission that ends in the air, and rebuild it."""
         with self._lock:  # type: ignore[attr-defined]
             ws, route = self._workspace, self._route  # type: ignore[attr-defined]
-            if self._run.active:  # type: ignore[attr-defined]
-                raise SessionError("a mission is under way: abort it or wait before editing the route")
+            why = mission_rules.blocker("add_landing", self._run.state)  # type: ignore[attr-defined]
+            if why is not None:
+                raise SessionError(why)
             if rules.ends_in_air(self._mission, ws) is None:  # type: ignore[attr-defined]
                 raise SessionError("the mission does not end in the air: no landing to add")
             x, y, _ = route.last_node()

@@ -22,6 +22,9 @@ The rules:
   whenever the robot is armed or off the ground and no mission is driving it. Land here and
   Return plan from the robot's position: off while it is unknown or stale; Return from the ground
   (a take-off) also waits for readiness. Hold and Disarm need no position.
+- **What each button may do in each mission state** (running, paused, failsafe, ended) is one
+  table, :mod:`console.session.mission_rules`: no Build, Execute or route edit while a mission is
+  under way (paused included), with the reason; :func:`route_edits` applies it to the route buttons.
 - **Goals inside the robot's margin are refused** with the reason (:func:`goal_clearance`).
 - **Battery** (like a ground station's low-battery warning and ArduPilot's battery failsafe):
   below :data:`BATTERY_LOW` Execute is off with the reason (:func:`battery_blocker`) and every tab
@@ -47,6 +50,7 @@ from pipeline.scene import Scene
 from planner.grid import CellState, CostWeights, PlanningGrid, Workspace
 from planner.mission import Mission, MissionError, MissionSegment, SegmentKind, mission_from_cells, simplify
 
+from console.session import mission_rules
 from console.session.session_types import RobotSnapshot, RunStatus, Vec3, fmt_point
 from console.wording import kind_text
 
@@ -212,12 +216,15 @@ def execute_blocker(mission: Mission | None, robot: RobotSnapshot | None, run: R
 
 
 # --- route edits ---------------------------------------------------------------------------------
-def route_edits(has_candidate: bool, registered: int, read_only: bool = False) -> dict[str, bool]:
+def route_edits(has_candidate: bool, registered: int, read_only: bool = False,
+                run_state: str = "idle") -> dict[str, bool]:
     """Which route edit buttons have something to act on: Register / Discard need a candidate;
     Undo / Build mission need a registered segment; Clear either (it drops both); nothing in a
-    read-only (replay) console."""
+    read-only (replay) console; and only what the mission state allows (:mod:`console.session.mission_rules`:
+    none while a mission runs, is paused or a failsafe acts)."""
     cand, reg = bool(has_candidate) and not read_only, registered > 0 and not read_only
-    return {"register": cand, "discard": cand, "undo": reg, "clear": reg or cand, "build": reg}
+    edits = {"register": cand, "discard": cand, "undo": reg, "clear": reg or cand, "build": reg}
+    return {b: ok and mission_rules.allowed(b, run_state) for b, ok in edits.items()}
 
 
 # --- vehicle commands ----------------------------------------------------------------------------

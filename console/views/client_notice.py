@@ -1,34 +1,123 @@
 """Pop-up notifications: for the one browser tab an operator action came from, how long they stay,
-and where the page shows them (with the "disconnected" banner).
+which newer news replaces them, and where the page shows them (with the "disconnected" banner).
 
-Errors (red) stay until the operator closes them; everything else closes by itself. The page
-shows notifications at the bottom right of the 3D view, beside the control panel, never over the
-middle or the upper left of the view where the operator clicks goals.
+Every notification closes by itself: errors (red) after :data:`ERROR_SECONDS`, the rest after
+:data:`INFO_SECONDS`. A notification about the same *subject* as one still shown in that tab
+replaces it (a "Mission done" replaces the "Mission: walk refused" error before it; a second
+"Capture & map failed" replaces the first), and a tab shows at most :data:`MAX_SHOWN`, the oldest
+closed first: notices never stack over the 3D view. The page shows them at the bottom right of the
+3D view, beside the control panel, never over the middle or the upper left where the operator
+clicks goals.
+
+A tab whose connection is lost retries every second whether or not it has the focus
+(:func:`reconnect_script`): viser's page retries only while the tab has the focus, so a tab in the
+background stayed "Disconnected ... reconnecting" after a restart while a new tab connected at once.
 """
 
 from __future__ import annotations
 
+import threading
+from collections import OrderedDict
 from typing import Any
 
 INFO_SECONDS = 6.0
 """How long a notification that is not an error stays [s]."""
 
+ERROR_SECONDS = 30.0
+"""How long an error stays [s] (unless newer news about the same subject replaces it first)."""
+
+MAX_SHOWN = 4
+"""Most notifications one tab shows at a time; a newer one closes the oldest."""
+
+SUBJECTS = (
+    ("mission", ("Mission", "Cannot execute", "Cannot pause", "Cannot resume", "Cannot abort", "No mission",
+                 "Execute", "Re-planned", "Landing added", "Battery")),
+    ("capture", ("Capture", "Mapped", "Check the camera pose", "Models not loaded", "Held capture")),
+    ("robot", ("Robot link", "Robot says", "Hold", "Land here", "Return", "Disarm", "Vehicle command")),
+    ("camera", ("Live camera",)),
+    ("goal", ("No goal there", "Goal not reachable", "Candidate path", "Cannot go there", "Go to ")),
+)
+"""Notification subjects by title prefix: newer news about a subject replaces the older notice."""
+
 _DEFAULT = object()
+_lock = threading.Lock()
+_shown: dict[Any, "OrderedDict[str, Any]"] = {}  # client id -> subject -> notification handle, oldest first
 
 
-def notice_seconds(color: str) -> float | None:
-    """How long a notification of ``color`` stays [s]; ``None`` (until closed) for errors (red)."""
-    return None if color == "red" else INFO_SECONDS
+def notice_seconds(color: str) -> float:
+    """How long a notification of ``color`` stays [s]: :data:`ERROR_SECONDS` for errors (red), else
+    :data:`INFO_SECONDS`."""
+    return ERROR_SECONDS if color == "red" else INFO_SECONDS
 
 
-def tell(client: Any, title: str, body: str, color: str = "blue", seconds: Any = _DEFAULT) -> None:
+def subject(title: str) -> str:
+    """What a notification is about (see :data:`SUBJECTS`); the title itself when not listed."""
+    for name, prefixes in SUBJECTS:
+        if title.startswith(prefixes):
+            return name
+    return title
+
+
+def _remove(handle: Any) -> None:
+    remove = getattr(handle, "remove", None)
+    if remove is None:
+        return
+    try:
+        remove()
+    except Exception:  # noqa: BLE001 - a tab that is gone or a notice already closed: nothing to remove
+        pass
+
+
+def tell(client: Any, title: str, body: str, color: str = "blue", seconds: Any = _DEFAULT,
+         about: str | None = None) -> None:
     """Show ``title`` / ``body`` in ``client``'s tab (nothing when the event had no client).
 
     ``seconds`` [s] before it closes by itself; by default :func:`notice_seconds` of the colour.
+    ``about`` is its subject (default :func:`subject` of the title): a notification about the same
+    subject still shown in that tab is replaced, and the tab keeps at most :data:`MAX_SHOWN`.
     """
-    if client is not None:
-        wait = notice_seconds(color) if seconds is _DEFAULT else seconds
-        client.add_notification(title, body, color=color, auto_close_seconds=wait)
+    if client is None:
+        return
+    wait = notice_seconds(color) if seconds is _DEFAULT else seconds
+    key = about if about is not None else subject(title)
+    cid = getattr(client, "client_id", id(client))
+    with _lock:
+        shown = _shown.setdefault(cid, OrderedDict())
+        old = [shown.pop(key)] if key in shown else []
+        while len(shown) >= MAX_SHOWN:
+            old.append(shown.popitem(last=False)[1])
+        handle = client.add_notification(title, body, color=color, auto_close_seconds=wait)
+        shown[key] = handle
+    for h in old:
+        _remove(h)
+
+
+def forget(client_id: Any) -> None:
+    """Drop what is remembered about a tab that disconnected."""
+    with _lock:
+        _shown.pop(client_id, None)
+
+
+def reconnect_script() -> str:
+    """JavaScript for the page: retry a lost connection every second even while the tab has no focus.
+
+    viser's page (``WebsocketInterface.tsx``) retries only while ``document.hasFocus()``; a page
+    that reports focus always retries as a focused tab does (immediately, then every second)."""
+    return ("if (!window.__morphonaviReconnect) { window.__morphonaviReconnect = true; "
+            "document.hasFocus = function () { return true; }; "
+            "window.dispatchEvent(new Event('focus')); }")
+
+
+def install_tab_rules(server: Any) -> None:
+    """Send :func:`reconnect_script` to every page of ``server`` (now and to pages that connect later),
+    and forget a tab's notifications when it disconnects.
+
+    The script goes as viser's message for page scripts (the one its Plotly support sends), which
+    the server keeps for pages that connect later."""
+    from viser._messages import RunJavascriptMessage
+
+    server.gui._websock_interface.queue_message(RunJavascriptMessage(source=reconnect_script()))
+    server.on_client_disconnect(lambda client: forget(client.client_id))
 
 
 DISCONNECTED_TEXT = "Disconnected from the MorphoNavi console server: reconnecting… (the view is frozen)"

@@ -16,6 +16,7 @@ import viser
 
 from planner.mission import Mission, SegmentKind
 
+from console.session import mission_rules
 from console.session import operator_state as rules
 from console.views.client_notice import tell
 from console.views.paths_view import KIND_RGB
@@ -181,7 +182,8 @@ class MissionView:
             mission = self._session.mission
             run: RunStatus = self._session.run
             registered = len(self._session.route_snapshot().registered)
-            self._build.disabled = not rules.route_edits(False, registered, self.read_only)["build"]
+            self._build.disabled = not rules.route_edits(False, registered, self.read_only, run.state)["build"]
+            build_off = mission_rules.blocker("build", run.state) if registered and not self.read_only else None
             if mission is None:
                 self._table.content = no_mission_text(registered)
             else:
@@ -191,6 +193,8 @@ class MissionView:
             self._execute.visible = not run.active
             self._execute.disabled = view.execute_blocker is not None
             notes = []
+            if build_off is not None:  # one rule per button and mission state (console.session.mission_rules)
+                notes.append(f"Build mission is off: {build_off}")
             if view.execute_blocker is not None and not run.active and mission is not None:
                 notes.append(f"Execute is off: {view.execute_blocker}")
             if view.route_note is not None and view.route_note != view.execute_blocker:
@@ -202,12 +206,12 @@ class MissionView:
             self._why.content = "".join(f"<small style='color:#b35c00'>{html.escape(n)}</small><br>" for n in notes)
             self._replan.visible = view.route_note is not None and not self.read_only
             self._landing.visible = view.air_end is not None and not run.active and not self.read_only
-            self._pause.visible = run.state == "running"
-            self._pause.disabled = run.state != "running"
-            self._resume.visible = run.state in ("paused", "failsafe") and view.resume_blocker is None
-            self._resume.disabled = run.state not in ("paused", "failsafe") or view.resume_blocker is not None
-            self._abort.visible = run.active
-            self._abort.disabled = not run.active
+            self._pause.visible = mission_rules.allowed("pause", run.state)
+            self._pause.disabled = not mission_rules.allowed("pause", run.state)
+            self._resume.visible = mission_rules.allowed("resume", run.state) and view.resume_blocker is None
+            self._resume.disabled = not mission_rules.allowed("resume", run.state) or view.resume_blocker is not None
+            self._abort.visible = mission_rules.allowed("abort", run.state)
+            self._abort.disabled = not mission_rules.allowed("abort", run.state)
             # a finished run's line belongs to the mission shown when it ended: a new Build hides it
             here = (mission.id if mission is not None else None,)
             if run.active or run.state == "idle":

@@ -25,7 +25,7 @@ from planner.mission import Mission, SegmentKind
 from console.session import operator_state as rules
 from console.views.client_notice import tell
 from console.views.picking import SELECT_MODIFIER, click_intent, drop_lines, top_view, typed_goal
-from console.session.session import MISSION, ROUTE, SETTINGS, Session, SessionError
+from console.session.session import MISSION, ROUTE, RUN, SETTINGS, Session, SessionError
 from console.wording import kind_text, plural
 
 log = logging.getLogger(__name__)
@@ -223,6 +223,16 @@ class PathsView:
             self.redraw_mission()
         elif topic == SETTINGS:
             self._sync_settings()
+        elif topic == RUN:  # the mission state rules the route buttons (console.session.mission_rules)
+            r = self._session.route_snapshot()
+            with self._lock:
+                self._sync_edits(r)
+
+    def _sync_edits(self, r: Any) -> None:
+        edits = rules.route_edits(r.candidate is not None, len(r.registered), self.read_only, self._session.run.state)
+        for name, handle in self._edit.items():
+            if handle.disabled != (not edits[name.lower()]):
+                handle.disabled = not edits[name.lower()]
 
     def _sync_settings(self) -> None:
         s = self._session.settings
@@ -255,9 +265,7 @@ class PathsView:
         sc = self._server.scene
         with self._lock:  # read inside the lock: the last redraw always draws the latest route
             r = self._session.route_snapshot()
-            edits = rules.route_edits(r.candidate is not None, len(r.registered), self.read_only)
-            for name, handle in self._edit.items():
-                handle.disabled = not edits[name.lower()]
+            self._sync_edits(r)
             self._put("start", lambda: sc.add_cylinder(
                 "/paths/start", radius=0.09, height=0.02, color=START_RGB,
                 position=(r.start[0], r.start[1], r.start[2] + 0.012), cast_shadow=False))

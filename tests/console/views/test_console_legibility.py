@@ -130,14 +130,16 @@ class _Client:
         self.shown.append((title, color, auto_close_seconds))
 
 
-def test_errors_stay_and_everything_else_closes_by_itself() -> None:
-    assert notice_seconds("red") is None and notice_seconds("blue") == notice_seconds("yellow") > 0
+def test_every_notice_closes_by_itself_errors_last() -> None:
+    # errors used to stay until closed and stacked over the 3D view (tests/console/views/test_notices.py)
+    assert notice_seconds("red") > notice_seconds("blue") == notice_seconds("yellow") > 0
     c = _Client()
     tell(c, "Saved", "x", "green")
     tell(c, "Not saved", "disk full", "red")
     tell(c, "Busy", "x", "yellow", 4.0)
     tell(None, "nobody", "x")  # an event without a tab: nothing, no error
-    assert c.shown == [("Saved", "green", notice_seconds("green")), ("Not saved", "red", None), ("Busy", "yellow", 4.0)]
+    assert c.shown == [("Saved", "green", notice_seconds("green")), ("Not saved", "red", notice_seconds("red")),
+                       ("Busy", "yellow", 4.0)]
 
 
 def test_the_page_style_moves_notifications_aside_and_has_a_disconnected_banner() -> None:
