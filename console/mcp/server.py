@@ -57,7 +57,7 @@ def _json(value: Any) -> str:
 
 def build_server(bridge: Bridge, allow_actions: bool = False, decision_timeout: float = DECISION_TIMEOUT) -> MCPServer:
     """The MCP server for ``bridge``; proposal tools only when ``allow_actions``."""
-    mcp = MCPServer("morphonavi", instructions=INSTRUCTIONS)
+    mcp = MCPServer("morphonavi", instructions=INSTRUCTIONS, log_level="WARNING")  # stderr: stdout is the protocol
     read_only = ToolAnnotations(read_only_hint=True, destructive_hint=False, open_world_hint=False)
     acts = ToolAnnotations(read_only_hint=False, destructive_hint=False, open_world_hint=True)
 
