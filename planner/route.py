@@ -29,7 +29,7 @@ from planner.astar import AStarSearcher, min_finite_cost
 from planner.cspace import box_distance
 from planner.grid import Closed, CostWeights, PlanningGrid
 from planner.mission import Mission, mission_from_cells
-from planner.viewpoint import suggest_viewpoint
+from planner.viewpoint import frontier_spot, suggest_viewpoint
 
 Vec3 = tuple[float, float, float]
 
@@ -48,6 +48,7 @@ class PlanResult:
     unseen: np.ndarray | None = None  # bool per path cell: not seen free (only with unknown space allowed)
     unseen_m: float = 0.0  # metres of the path whose move ends in an unseen cell
     viewpoint: Vec3 | None = None  # goal not seen yet: a reachable spot to look from (camera position) [m]
+    frontier: Vec3 | None = None  # ... when no reachable spot sees it: where to Look around next (camera position) [m]
 
     def points(self, grid: PlanningGrid) -> np.ndarray:
         """World points of the path (cell centres, ground cells on the floor) [m]."""
@@ -102,6 +103,7 @@ class Route:
         self._weights = weights
         self.start: Vec3 = (float(start[0]), float(start[1]), float(start[2]))
         self.start_warning = ""
+        self._last_frontier: Vec3 | None = None
         self._cost = self._own_cost()
         self._min_cost = _lowest_cost(self._cost)
         self.no_corner_cutting = bool(no_corner_cutting)
@@ -236,6 +238,11 @@ class Route:
             if vp is not None:
                 return (f"{here} is not seen yet: look from {_fmt(vp)} m (go there and capture towards it), "
                         "or Look around"), vp
+            edge = self.frontier_for(p)
+            self._last_frontier = edge
+            if edge is not None:
+                return (f"{here} is not seen yet and no seen-free spot the robot can reach sees it: Look around, "
+                        f"or go to {_fmt(edge)} m (the edge of what was seen nearest it) and Look around there"), None
             return f"{here} is not seen yet and no seen-free spot the robot can reach sees it: Look around", None
         if why is Closed.UNLABELLED:
             return (f"{here} is inside an unlabelled obstacle (the depth map saw a surface there that no mapped "
@@ -275,6 +282,14 @@ class Route:
             return None
         return suggest_viewpoint(self._grid, np.isfinite(self._cost), s, target)
 
+    def frontier_for(self, target: Sequence[float]) -> Vec3 | None:
+        """The reachable spot at the edge of what was seen nearest ``target`` (camera position, world
+        [m]), or ``None`` (see :func:`planner.viewpoint.frontier_spot`)."""
+        s = self._grid.workspace.cell_of(self.start)
+        if s is None or not math.isfinite(self._cost[s]):
+            return None
+        return frontier_spot(self._grid, np.isfinite(self._cost), s, target)
+
     def _end_point(self, cell: Sequence[int]) -> Vec3:
         pt = path_points(np.array([cell], dtype=np.int64), self._grid)[0]
         return (float(pt[0]), float(pt[1]), float(pt[2]))
@@ -288,8 +303,9 @@ class Route:
         if g is None:
             return PlanResult(False, why)
         if not math.isfinite(self._cost[g]):
+            self._last_frontier = None
             text, vp = self._refusal(g, goal, "goal")
-            return PlanResult(False, text, viewpoint=vp)
+            return PlanResult(False, text, viewpoint=vp, frontier=self._last_frontier)
         t0 = time.perf_counter()
         with self._search_lock:
             res = self._searcher.search(self._cost, s, g, resolution=self._grid.workspace.resolution,

@@ -15,6 +15,10 @@ candidate sees the target when
 The best candidate is the one with the least ``distance from the robot x layer weight + half the
 distance to the target`` (walking spots preferred: flying costs three times as much, as the
 planner's flight layers do).
+
+When no reachable spot sees the target (e.g. the floor just behind a wall taller than the camera:
+a level camera never looks down more than its half field of view), :func:`frontier_spot` gives the
+next place to Look around: the reachable cell at the edge of what was seen nearest the target.
 """
 
 from __future__ import annotations
@@ -25,6 +29,7 @@ from typing import Sequence
 import numpy as np
 from scipy import ndimage
 
+from planner.cspace import dilate
 from planner.grid import Closed, PlanningGrid
 
 MIN_RANGE = 0.5
@@ -41,6 +46,34 @@ MAX_CANDIDATES = 600
 
 _BLOCKING = (Closed.OBJECT, Closed.UNLABELLED, Closed.BENEATH)
 _FACES = ndimage.generate_binary_structure(3, 1)
+
+
+def frontier_spot(grid: PlanningGrid, passable: np.ndarray, start_cell: Sequence[int],
+                  target: Sequence[float]) -> tuple[float, float, float] | None:
+    """Where to Look around next when no reachable spot sees ``target``: the reachable cell next to
+    unknown space (a frontier: within the robot's radius and a cell of unknown cells) nearest the target, ties to the
+    one nearest the robot (camera position, world [m]); ``None`` when the robot reaches no frontier."""
+    ws = grid.workspace
+    s = tuple(int(v) for v in start_cell)
+    if grid.reason is None or not passable[s]:
+        return None
+    lab, _ = ndimage.label(passable, _FACES)
+    reach = lab == lab[s]
+    unknown = grid.reason == Closed.UNKNOWN
+    # within the robot's radius and a cell of unknown space (nearer cells are closed for its size)
+    near_unknown = dilate(unknown, max(grid.robot.radius, grid.robot.flying_radius) + ws.resolution,
+                          ws.resolution) & reach
+    idx = np.argwhere(near_unknown)
+    if len(idx) == 0:
+        return None
+    eyes = ws.centers(idx)
+    ground = idx[:, 2] == 0
+    eyes[ground, 2] = ws.floor + grid.robot.camera_height
+    t = np.asarray([float(v) for v in target])
+    here = ws.centers(np.array([s]))[0]
+    score = np.linalg.norm(eyes - t, axis=1) + 0.25 * np.linalg.norm(eyes - here, axis=1)
+    best = eyes[int(np.argmin(score))]
+    return (float(best[0]), float(best[1]), float(best[2]))
 
 
 def suggest_viewpoint(grid: PlanningGrid, passable: np.ndarray, start_cell: Sequence[int],
@@ -102,4 +135,4 @@ def suggest_viewpoint(grid: PlanningGrid, passable: np.ndarray, start_cell: Sequ
     return (float(best[0]), float(best[1]), float(best[2]))
 
 
-__all__ = ["FLIGHT_WEIGHT", "MAX_RANGE", "MIN_RANGE", "suggest_viewpoint"]
+__all__ = ["FLIGHT_WEIGHT", "MAX_RANGE", "MIN_RANGE", "frontier_spot", "suggest_viewpoint"]

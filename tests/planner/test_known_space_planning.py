@@ -101,6 +101,12 @@ def test_unknown_space_is_closed_with_a_viewpoint_or_allowed_with_unseen_metres(
     vx, vy, vz = res.viewpoint
     assert vy < 4.5 and math.dist((vx, vy), (2.5, 6.0)) <= 5.0
     assert route.propose((2.5, 3.0, 0.0)).ok  # seen free: fine
+    # behind a wall taller than the camera no reachable spot sees the floor: the edge of what was seen
+    wall = [SceneObject("wall", "office_cabinet", (2.5, 4.2, 1.0), (0.3, 2.0, 5.0))]
+    walled = build_grid(wall, WS, known=ks)
+    far = Route(walled, (2.5, 1.0, 0.0)).propose((2.5, 5.0, 0.0))
+    assert not far.ok and far.viewpoint is None and far.frontier is not None
+    assert "Look around there" in far.message and far.frontier[1] < 4.2
     allowed = build_grid([], WS, known=ks, unknown="allow")
     r2 = Route(allowed, (2.5, 1.0, 0.0))
     ok = r2.propose((2.5, 6.0, 0.0))
