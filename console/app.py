@@ -362,11 +362,15 @@ class ConsoleApp:
 
             self.views["held_capture"] = HeldCaptureControls(server, session, self.mapping)
             self.views["grid"] = GridView(server, session)
+            from console.views.known_space_view import KnownSpaceView, UnknownToggle  # seen / unseen / unlabelled
+
+            self.views["known_space"] = KnownSpaceView(server, session, layers=self.views["grid"].layers_folder)
             self.views["objects"] = ObjectsView(
                 server, session, on_node_click=lambda cid: paths_holder["p"].note_node_click(cid) if paths_holder else None,
                 layers=self.views["grid"].layers_folder)
         with gui.add_folder("Plan"):
             paths_holder["p"] = self.views["paths"] = PathsView(server, session)
+            self.views["unknown_toggle"] = UnknownToggle(server, session)
         with gui.add_folder("Scene summary"):
             self.views["summary"] = SceneSummaryView(server, session)
             self._closers.append(self.views["summary"].close)
@@ -478,6 +482,7 @@ class ConsoleApp:
                 raise NotReady from None  # robot-frame objects: wait for the robot's first pose
             raise
         report = self.session.spawn(world, origin=f"file {name}")
+        self.session.warn_objects_over_robot(f"scene file {name}")  # names an object placed over the robot
         self.session.notify("Scene file spawned", f"{name}: {len(report.added)} new, {plural(len(report.updated), 'updated object')}"
                             + ("; " + "; ".join(report.notes) if report.notes else ""), "success")
 

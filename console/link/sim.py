@@ -305,9 +305,9 @@ class SimRobot(RobotLink):
 
     def _check_free(self, p: np.ndarray, what: str) -> None:
         why = self._blocker(p)
-        if why is None and self._contact.touches(p):
-            why = (f"the robot's body ({self.config.body_radius:.2f} m radius) at ({p[0]:.2f}, {p[1]:.2f}, "
-                   f"{p[2]:.2f}) touches an object of the world")
+        inside = BodyContact(self.world.objects, 1e-3, 1e-3)  # a start against an object is fine: it can move away
+        if why is None and inside.touches(p):
+            why = f"({p[0]:.2f}, {p[1]:.2f}, {p[2]:.2f}) is inside an object of the world"
         if why is not None:
             raise LinkError(f"{what} is not free: {why}")
 

@@ -39,7 +39,8 @@ MAX_BYTES = 512 * 1024 * 1024  # rotate past this size [bytes]
 FLUSH_S = 2.0  # the data reach the file at least this often [s]
 QUEUE_SIZE = 4096  # announcements waiting for the writer; robot states are dropped first when full
 _STATE_TOPICS = (rs.SESSION_INFO, rs.SCENE_JSON, rs.MAP, rs.GRID, rs.ROUTE_JSON, rs.MISSION_JSON, rs.PATHS,
-                 rs.CAPTURE_META, rs.IMAGE, rs.CALIBRATION, rs.DEPTH, rs.PROGRESS)
+                 rs.CAPTURE_META, rs.IMAGE, rs.CALIBRATION, rs.DEPTH, rs.PROGRESS, rs.KNOWN_SPACE)
+KNOWN = "known_space"  # the session's topic (console.session.known_space_state.KNOWN_SPACE)
 
 
 class Recorder:
@@ -105,6 +106,8 @@ class Recorder:
         self._put(rs.SESSION_INFO, rs.session_info(s.workspace, s.margin, s.route_snapshot().start))
         self._put(SCENE, s.scene)
         self._put(GRID, s.grid)
+        if getattr(s, "known_space", None) is not None:
+            self._put(KNOWN, (s.known_space, s.known_summary()))
         self._put(ROUTE, (s.route_snapshot(), s.mission))
         self._put(MISSION, (s.route_snapshot(), s.mission))
         if s.capture is not None:
@@ -171,6 +174,8 @@ class Recorder:
                 self._put(RUN, payload)
         elif topic in (CAPTURE, NOTICE, AGENT):
             self._put(topic, payload)
+        elif topic == KNOWN:
+            self._put(KNOWN, (s.known_space, payload))
         elif topic == JOB and payload is not None and not payload.running:
             self._put(JOB, payload)
         elif topic == SELECTION:
@@ -328,6 +333,12 @@ class Recorder:
                 self._encode(t, ns, msg)
             self._encode(rs.LOG, ns, rs.log_message(ns, f"capture {payload.id}: {len(payload.detections)} detections "
                                                     f"({payload.backend})", name="operator"))
+        elif topic == KNOWN:  # the grid itself (compact JSON form) and what it holds
+            space, summary = payload
+            self._encode(rs.KNOWN_SPACE, ns, {
+                "known_space": None if space is None else space.to_dict(), "free": summary.free,
+                "occupied": summary.occupied, "unknown": summary.unknown, "unlabelled": summary.unlabelled,
+                "plan_unknown": summary.policy})
         elif topic == RUN:
             self._encode(rs.PROGRESS, ns, rs.run_json(payload))
             self._encode(rs.LOG, ns, rs.log_message(ns, f"mission {payload.state}: {payload.message}", name="mission"))

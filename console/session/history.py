@@ -40,6 +40,7 @@ class SceneState:
         capture: The last capture shown, or ``None``.
         capture_meta: Its stored metadata (``session.json``'s ``last_capture``), or ``None``.
         key: Edits with the same non-empty key are one step (a capture and the spawn of its objects).
+        known: The known space (:mod:`console.session.known_space_state`), or ``None``.
     """
 
     label: str
@@ -50,6 +51,7 @@ class SceneState:
     capture: CaptureRecord | None
     capture_meta: dict[str, Any] | None
     key: str = ""
+    known: Any = None
 
 
 class History:
@@ -87,7 +89,7 @@ class Undo:
     def _remember_locked(self: "Session", label: str, key: str = "") -> None:
         """Push the state before an edit."""
         self._history.push(SceneState(label, self._scene, self._grid, self._route.to_dict(), self._mission,
-                                      self._capture, self._capture_meta, key))
+                                      self._capture, self._capture_meta, key, getattr(self, "_known", None)))
 
     @property
     def undo_label(self: "Session") -> str | None:
@@ -112,6 +114,7 @@ class Undo:
             route.restore(state.route)
             self._scene, self._grid, self._route, self._mission = state.scene, state.grid, route, state.mission
             self._capture, self._capture_meta = state.capture, state.capture_meta
+            self._known = state.known  # the known space as it was before the capture
             if self._selected is not None and self._selected not in {o.id for o in state.scene.objects}:
                 self._selected = None
             self._sync_start_locked()

@@ -233,13 +233,14 @@ class MappingJob:
                                      "the map with it, or discard it.", "warning")
                 return True
             report = self._session.spawn(result.scene, origin=f"capture {cap_id}")
+            known = self._observe_known(cap_id, shot, result)  # the known space, one undo step with the capture
             dt = time.perf_counter() - t0
             rejected = preview.rejected
             summary = (f"{n} objects seen ({len(report.added)} new, {len(report.updated)} updated"
                        + (f", {len(rejected)} not used" if rejected else "") + f") in {dt:.1f} s")
             dropped = ("; not used: " + "; ".join(f"{o.label} ({o.reason})" for o in rejected)) if rejected else ""
             # a close-up drops only what it cannot range: each one and why stays on the panel
-            self._session.set_job(JobStatus(name, False, 1.0, summary + dropped))
+            self._session.set_job(JobStatus(name, False, 1.0, summary + dropped + known))
             notes = preview.notes() + list(report.notes)
             body = summary + ("; " + "; ".join(notes) if notes else "")
             self._session.notify("Mapped", body, "warning" if rejected else "success")
@@ -257,6 +258,40 @@ class MappingJob:
             self._session.set_job(JobStatus(self._job_name, False, 0.0, "failed", repr(exc)))
             self._session.notify("Capture & map failed", f"internal error: {exc!r}", "error")
             return False
+
+
+    def _observe_known(self, cap_id: str, shot: CaptureResult, result: Perception) -> str:
+        """Cast the capture's depth through the session's known space; the panel's words about it.
+
+        The depth is the perception's (the simulator's rendered depth, a depth model's scaled map) or,
+        without one, the mapped boxes'. Says how many occupied cells no mapped object explains and how
+        much of the near depth the mapped objects explain, and warns when that is little.
+        """
+        observe = getattr(self._session, "observe_capture", None)
+        if observe is None:
+            return ""
+        exact = self.perceiver.label.startswith("ground truth")
+        try:
+            summary = observe(cap_id, result.depth, shot.intrinsics, shot.camera_pose, shot.robot_pose, exact=exact)
+        except SessionError as exc:
+            return f"; {exc}"
+        cells = "cell" if summary.unlabelled == 1 else "cells"
+        text = f"; {summary.unlabelled} unlabelled obstacle {cells}"
+        if result.depth is None:
+            return text + " (no depth: known space from the mapped boxes)"
+        from pipeline.mapping.known_space_update import explained_share
+
+        ws = self._session.workspace
+        ex = explained_share(np.nan_to_num(np.asarray(result.depth, dtype=np.float64), nan=0.0), shot.intrinsics,
+                             shot.camera_pose, self._session.scene.objects, ws.min, ws.max)
+        text += f"; mapped objects explain {100 * ex.share:.0f} % of the near depth"
+        if ex.low:
+            self._session.notify(
+                "Little of the photo explained",
+                f"capture {cap_id}: the mapped objects explain only {100 * ex.share:.0f} % of the near depth: the depth "
+                "sees obstacles the detector did not name (drawn as unlabelled obstacles; the planner avoids them)",
+                "warning")
+        return text
 
 
 # --- perception backends ----------------------------------------------------------------------------

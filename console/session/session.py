@@ -45,6 +45,7 @@ from pipeline.scene import SceneError, check_plausible
 
 from console.session.capture_files import CAPTURE_DIR
 from console.session.history import History, Undo
+from console.session.known_space_state import KnownSpaceSession
 from console.session.merge import merge_observations
 from console.session.operator_session import OperatorRules
 from console.views.picking import goal_on_plane, ray_plane
@@ -67,7 +68,7 @@ __all__ = [
 log = logging.getLogger(__name__)
 
 
-class Session(Persistence, Undo, OperatorRules):
+class Session(Persistence, Undo, OperatorRules, KnownSpaceSession):
     """All console state, thread-safe, observable, persisted in one folder (see :class:`Persistence`).
 
     Args:
@@ -111,6 +112,8 @@ class Session(Persistence, Undo, OperatorRules):
         self._restore_problems: list[str] = []
         self._outbox: list[Notice] = []  # notices raised under the lock, sent by the next _emit
         self._history = History()
+        self._known = None  # known space (console.session.known_space_state): None until the first capture
+        self._plan_unknown = "closed"
 
     # --- observers -----------------------------------------------------------------------------
     def subscribe(self, listener: Listener) -> Callable[[], None]:
@@ -391,10 +394,7 @@ class Session(Persistence, Undo, OperatorRules):
 
     def _set_scene_locked(self, scene: Scene, label: str, key: str = "") -> list[str]:
         """Swap in ``scene`` (undoably, as ``label``); warns every tab when registered segments are lost."""
-        try:
-            grid = build_grid(scene, self._workspace, self._margin)
-        except GridError as exc:
-            raise SessionError(f"cannot build the planning grid: {exc}") from None
+        grid = self._grid_for_locked(scene)  # with the known space, if any
         self._remember_locked(label, key)
         old_grid, had_mission = self._grid, self._mission is not None
         goals = [tuple(path_points(seg, old_grid)[-1]) for seg in self._route.registered if len(seg)]

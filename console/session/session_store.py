@@ -200,6 +200,8 @@ class SavedSession:
     last_capture: dict[str, Any] | None
     problems: tuple[str, ...] = ()
     notes: tuple[str, ...] = ()
+    known: Any = None  # known space (console.session.known_space_state), None: none saved
+    plan_unknown: str = "closed"
 
 
 def parse_saved(data: Any, where: str, workspace: Workspace | None = None) -> SavedSession:
@@ -277,7 +279,11 @@ def parse_saved(data: Any, where: str, workspace: Workspace | None = None) -> Sa
             problems.append(f"{bad}: must be finite: the last capture was not restored")
         else:
             capture = cap_raw
-    return SavedSession(scene, mission, mode, alt, route, capture, tuple(problems), tuple(notes))
+    from console.session.known_space_state import known_from_saved
+
+    known, plan_unknown, known_problems = known_from_saved(data, workspace)
+    problems += known_problems
+    return SavedSession(scene, mission, mode, alt, route, capture, tuple(problems), tuple(notes), known, plan_unknown)
 
 
 def same_workspace(saved: dict[str, Any], ws: Workspace) -> bool:
@@ -333,8 +339,10 @@ class Persistence:
     def to_dict(self: "Session") -> dict[str, Any]:
         """The whole persistent state as a JSON-ready dict."""
         with self._lock:
-            return session_to_dict(self._workspace, self._margin, self._scene, self._route,
+            data = session_to_dict(self._workspace, self._margin, self._scene, self._route,
                                    self._mission, self._settings, self._capture_meta)
+            data.update(self._known_json_locked())  # type: ignore[attr-defined]  # KnownSpaceSession
+            return data
 
     def save(self: "Session", name: str | None = None) -> Path:
         """Write the session to ``session.json`` or to the typed ``name`` in the session folder."""
@@ -448,7 +456,11 @@ class Persistence:
         notes = list(saved.problems) + list(saved.notes)
         mission = saved.mission
         with self._lock:
-            grid = build_grid(saved.scene, self._workspace, self._margin)
+            if remember is not None:  # the known space before the load comes back with an undo
+                self._remember_locked(remember)
+                remember = None
+            self._known, self._plan_unknown = saved.known, saved.plan_unknown  # type: ignore[attr-defined]
+            grid = self._grid_for_locked(saved.scene)  # type: ignore[attr-defined]  # KnownSpaceSession
             route = Route(grid, self._route.start, self._weights)
             if saved.route is not None:
                 try:

@@ -36,7 +36,7 @@ JSON_SCHEMAS = {
     "/robot/state": "morphonavi.RobotState", "/morphonavi/capture": "morphonavi.Capture",
     "/mission/progress": "morphonavi.MissionProgress", "/morphonavi/scene": "morphonavi.Scene",
     "/morphonavi/route": "morphonavi.Route", "/morphonavi/mission": "morphonavi.Mission",
-    "/morphonavi/session": "morphonavi.Session",
+    "/morphonavi/session": "morphonavi.Session", "/map/known_space": "morphonavi.KnownSpace",
 }
 GOALS = [(x, y, 0.0) for y in (2.4, 2.0, 1.6) for x in (2.5, 1.5, 3.5, 1.0, 4.0)]
 
