@@ -316,6 +316,8 @@ class Route:
             if self._grid.rule == "closed" and self._grid.reason is not None and \
                     bool(np.any(self._grid.reason == Closed.UNKNOWN)):
                 hint = " or unseen space (Look around, or plan with unknown space allowed)"
+            elif self._grid.rule == "allow" and goal[2] - self._grid.workspace.floor < self._grid.workspace.resolution:
+                hint = " (with unknown space allowed the robot still lands only on seen-free floor)"
             return PlanResult(False, f"no path from {_fmt(start)} to {_fmt(goal)}: the goal is cut off by obstacles{hint}",
                               expanded=res.expanded, seconds=dt)
         cells = res.path.astype(np.int64)
