@@ -107,3 +107,22 @@ def test_an_object_placed_over_the_robot_is_named(tmp_path: Path) -> None:
     high = SceneObject("shelf", "desk", (2.5, 0.7, 2.0), (1.0, 0.1, 1.0), 0.0, "world")  # well above the body
     assert objects_over((2.5, 0.7, 0.0), [high], 0.35) == []
     assert math.isfinite(s.known_summary().seen_share)
+
+
+def test_unknown_space_is_closed_until_the_operator_allows_it_and_the_unseen_part_is_measured(mapped) -> None:
+    robot, session, job = mapped
+    assert job.run()
+    behind = (2.5, 5.3, 0.0)  # behind the line of boxes: not seen from the start
+    res = session.add_goal(behind)
+    assert not res.ok and "not seen yet" in res.message, res.message
+    assert session.unseen_route()[1] == 0.0
+    text = session.set_plan_unknown(True)
+    assert text.startswith("planning into unknown space") and session.plan_unknown == "allow"
+    assert json.loads((session.folder / "session.json").read_text())["plan_unknown"] == "allow"
+    res = session.add_goal(behind)
+    assert res.ok, res.message
+    segs, metres = session.unseen_route()
+    assert len(segs) > 0 and metres == pytest.approx(res.unseen_m, abs=1e-6) and "unseen space" in res.message
+    assert "planning into unknown space" in session.known_summary().text()
+    session.set_plan_unknown(False)
+    assert session.plan_unknown == "closed" and session.unseen_route()[1] == 0.0
