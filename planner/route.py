@@ -290,6 +290,12 @@ class Route:
             return None
         return frontier_spot(self._grid, np.isfinite(self._cost), s, target)
 
+    def snapped(self, p: Sequence[float]) -> Vec3 | None:
+        """Where a goal at ``p`` (world [m]) ends up: its cell's centre, on the floor for the ground
+        layer; ``None`` outside the workspace or not 3 finite numbers."""
+        cell, _ = self._locate(p, "goal")
+        return None if cell is None else self._end_point(cell)
+
     def _end_point(self, cell: Sequence[int]) -> Vec3:
         pt = path_points(np.array([cell], dtype=np.int64), self._grid)[0]
         return (float(pt[0]), float(pt[1]), float(pt[2]))

@@ -109,11 +109,13 @@ class OperatorRules:
 
     # --- hooks called by the session -------------------------------------------------------------
     def _goal_problem_locked(self, goal: Vec3) -> str | None:
-        """Why a goal is refused before planning (inside the robot's margin), or ``None``."""
+        """Why a goal is refused before planning (inside the robot's margin), or ``None``. Measured at
+        the goal's cell centre, where the planner checks and plans it (one rule for both)."""
         cell, _ = self._route.check_point(goal, "goal")  # type: ignore[attr-defined]
         if cell is None:
-            return None  # outside, or inside an obstacle: the planner says so
-        return rules.goal_clearance(goal, self._scene, self._margin, self._workspace)  # type: ignore[attr-defined]
+            return None  # outside, or closed for the robot's size: the planner says so
+        spot = self._route.snapped(goal) or goal  # type: ignore[attr-defined]
+        return rules.goal_clearance(spot, self._scene, self._margin, self._workspace)  # type: ignore[attr-defined]
 
     def _build_locked(self) -> Mission:
         """The registered route as a mission (it may start in the air); raises :class:`SessionError`."""
