@@ -333,8 +333,10 @@ class Route:
         moved = math.dist(end, (float(goal[0]), float(goal[1]), float(goal[2])))
         if moved > 0.01:
             msg += f"; goal snapped to {_fmt(end)} ({moved:.2f} m away)"
-        if unseen_m > 0:
-            msg += f"; {unseen_m:.2f} m of it through unseen space"
+        if unseen_m > 0 and unseen is not None:
+            idx = np.nonzero(unseen)[0]
+            pts = path_points(cells[[idx[0], idx[-1]]], self._grid)
+            msg += f"; {unseen_m:.2f} m of it through unseen space (between {_fmt(pts[0])} and {_fmt(pts[1])})"
         return PlanResult(True, msg, cells, float(res.cost), int(res.expanded), dt, end, unseen, unseen_m)
 
     def unseen_part(self, cells: np.ndarray) -> tuple[np.ndarray | None, float]:
