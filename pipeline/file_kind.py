@@ -149,6 +149,26 @@ def wrong_kind(where: str, name: str, found: str, expected: str) -> str:
     return f"{where}{name} is {k.what}, not {want}{tail}"
 
 
+def os_error_words(exc: BaseException, path: str | os.PathLike[str]) -> str:
+    """What an :class:`OSError` of writing or reading ``path`` means, in words (never ``[Errno 13] ...``)."""
+    import errno
+
+    folder = Path(path).expanduser().parent
+    code = getattr(exc, "errno", None) or 0
+    return {
+        errno.EACCES: f"no permission to write in {folder}",
+        errno.EPERM: f"no permission to write in {folder}",
+        errno.EROFS: f"{folder} is on a read-only file system",
+        errno.ENOSPC: "the disk is full",
+        errno.EDQUOT: "the disk quota is used up",
+        errno.ENOENT: f"the folder {folder} does not exist",
+        errno.ENOTDIR: f"{folder} is not a folder",
+        errno.EISDIR: f"{path} is a folder",
+        errno.EEXIST: f"{path} exists and is not a folder",
+        errno.ENAMETOOLONG: "the file name is too long",
+    }.get(code, (getattr(exc, "strerror", None) or str(exc) or type(exc).__name__).lower())
+
+
 def read_limited(path: str | os.PathLike[str], limit: int, what: str, option: str = "") -> bytes:
     """The bytes of ``path`` when it is at most ``limit`` bytes, checked before it is read.
 
@@ -301,5 +321,5 @@ def describe_file(path: str | os.PathLike[str], limit: int = 100 * MB) -> str:
         return "json"
 
 
-__all__ = ["FileKindError", "check_scene_ranges", "KINDS", "Kind", "MAX_BYTES", "MAX_SCENE_OBJECTS", "MCAP_MAGIC", "describe_file",
+__all__ = ["FileKindError", "check_scene_ranges", "os_error_words", "KINDS", "Kind", "MAX_BYTES", "MAX_SCENE_OBJECTS", "MCAP_MAGIC", "describe_file",
            "kind_of_json", "load_scene_file", "read_json_of_kind", "read_limited", "sniff", "wrong_kind"]

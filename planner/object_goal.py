@@ -51,6 +51,7 @@ from typing import Sequence
 
 import numpy as np
 from scipy import ndimage
+from scipy.spatial import cKDTree
 
 from pipeline.scene import Scene, SceneObject
 
@@ -199,11 +200,30 @@ class Reachability:
         ws = grid.workspace
         xs, ys, _ = ws.axes()
         self._xy = np.stack(np.meshgrid(xs, ys, indexing="ij"), axis=-1)  # [nx, ny, 2]
-        flat = self._xy.reshape(-1, 2)
-        clearance = np.full(len(flat), np.inf)  # [m] from each ground cell's centre to the nearest footprint
+        self._axes = (xs, ys)
+        # [m] from each ground cell's centre to the nearest footprint, where that is within the margin
+        # (each object only updates the cells near it: linear in the objects, not objects x cells)
+        clearance = np.full(self._xy.shape[:2], np.inf)
         for o in self.objects:
-            clearance = np.minimum(clearance, footprint_distance(o, flat))
-        self._clearance = clearance.reshape(self._xy.shape[:2])
+            win = self._window(o, grid.margin)
+            clearance[win] = np.minimum(clearance[win], footprint_distance(o, self._xy[win].reshape(-1, 2))
+                                        .reshape(self._xy[win].shape[:2]))
+        self._clearance = clearance
+        self._modes = [(mode, cand) for mode, cand in (
+            ("walk", self._walk & self._ground_ok), ("fly", self._landable), ("fly", self._all[:, :, 0] & self._ground_ok))
+            if cand.any()]  # the candidate floor of each mode, once for every object
+        self._centres = cKDTree(np.array([o.position[:2] for o in self.objects])) if self.objects else None
+        self._reach_r = max((math.hypot(o.size[0], o.size[2]) for o in self.objects), default=0.0)
+
+    def _window(self, obj: SceneObject, pad: float) -> tuple[slice, slice]:
+        """Index slices of the ground cells whose centres may lie within ``pad`` [m] of ``obj``'s footprint."""
+        f = footprint(obj)
+        xs, ys = self._axes
+        i0 = int(np.searchsorted(xs, f[:, 0].min() - pad - 1e-9, side="left"))
+        i1 = int(np.searchsorted(xs, f[:, 0].max() + pad + 1e-9, side="right"))
+        j0 = int(np.searchsorted(ys, f[:, 1].min() - pad - 1e-9, side="left"))
+        j1 = int(np.searchsorted(ys, f[:, 1].max() + pad + 1e-9, side="right"))
+        return slice(i0, i1), slice(j0, j1)
 
     def approach(self, obj: SceneObject, plan: bool = True) -> Approach:
         """Where to stand beside ``obj`` and how to get there (see the module docstring)."""
@@ -212,11 +232,12 @@ class Reachability:
         ws = self.grid.workspace
         connected = False  # some floor the robot gets to lies within APPROACH_MAX
         roomy = False  # ... and some of it keeps the robot's radius from every object
-        for mode, cand in (("walk", self._walk & self._ground_ok), ("fly", self._landable),
-                           ("fly", self._all[:, :, 0] & self._ground_ok)):
-            if not cand.any():
+        win = self._window(obj, APPROACH_MAX)  # only cells near the object can be approach cells
+        offset = np.array([win[0].start, win[1].start])
+        for mode, cand in self._modes:
+            idx = np.argwhere(cand[win]) + offset  # row-major, as over the whole grid
+            if not len(idx):
                 continue
-            idx = np.argwhere(cand)
             pts = self._xy[idx[:, 0], idx[:, 1]]
             gap = footprint_distance(obj, pts)
             near = gap <= APPROACH_MAX + 1e-9
@@ -242,7 +263,10 @@ class Reachability:
         """``(code, text)``: why no approach cell beside ``obj`` can be used (order: module docstring)."""
         ws = self.grid.workspace
         box = (f"x {ws.min[0]:.2f} to {ws.max[0]:.2f} m, y {ws.min[1]:.2f} to {ws.max[1]:.2f} m")
-        near = footprint_distance(obj, self._xy.reshape(-1, 2)).reshape(self._xy.shape[:2]) <= APPROACH_MAX + 1e-9
+        win = self._window(obj, APPROACH_MAX)
+        near = np.zeros(self._xy.shape[:2], dtype=bool)
+        near[win] = footprint_distance(obj, self._xy[win].reshape(-1, 2)).reshape(self._xy[win].shape[:2]) \
+            <= APPROACH_MAX + 1e-9
         x, y = obj.position[0], obj.position[1]
         if not near.any():
             return "outside_workspace", (f"it lies outside the planning workspace ({box}; its centre at "
@@ -297,7 +321,9 @@ class Reachability:
         n = max(2, int(math.ceil(length / REACH_STEP)) + 1)
         line = xy[None, :] + np.linspace(0.0, 1.0, n)[:, None] * (target - xy)[None, :]
         lo, hi = obj.position[2] - obj.size[1] / 2, obj.position[2] + obj.size[1] / 2
-        for other in self.objects:
+        near = [] if self._centres is None else \
+            self._centres.query_ball_point(xy, length + self._reach_r + 1e-6)  # the others can be nowhere else
+        for other in (self.objects[k] for k in sorted(near)):
             if other.id == obj.id:
                 continue
             o_lo, o_hi = other.position[2] - other.size[1] / 2, other.position[2] + other.size[1] / 2

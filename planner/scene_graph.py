@@ -37,7 +37,8 @@ Deterministic rules and their thresholds (all module constants):
   group are left out; relations of an outside object to several members are stated once, against
   the group (left / right are not stated for groups).
 - **Reachability** (with a robot pose and a grid): walk, fly or none, by
-  :class:`planner.object_goal.Reachability` (the Aerial-Ground A*'s own connectivity and costs);
+  :class:`planner.object_goal.Reachability` (the Aerial-Ground A*'s own connectivity and costs; the
+  path itself, its cost and landing spot, is planned for the :data:`PLAN_MAX` nearest objects only);
   when unreachable, ``reach.code`` (:data:`planner.object_goal.REASONS`) and ``reach.reason`` say
   why: outside the planning workspace, no free floor beside it, closed in, cramped, walled off...
 - **Uncertainties**: detector score below :data:`LOW_SCORE`, a size not from the catalog, a
@@ -73,6 +74,9 @@ NEXT_TO_GAP = 0.50  # [m]
 BEHIND_OVERLAP = 0.25  # fraction of the narrower bearing interval
 BEHIND_DEPTH = 0.30  # [m]
 BEHIND_GAP = 3.0  # [m] farthest footprint gap of a stated behind / in_front_of pair
+PLAN_MAX = 100
+"""Objects nearest the robot whose approach path is planned with the A* (cost, walk+fly, landing); the
+others' reachability (walk / fly / none and why) comes from the grid's connectivity alone."""
 SIDE_GAP = 1.00  # [m]
 HIDDEN_FRACTION = 0.90
 PARTLY_FRACTION = 0.25
@@ -326,6 +330,9 @@ def build_scene_graph(scene: Scene, robot: Sequence[float] | None = None, grid: 
     records: list[dict[str, Any]] = []
     view = RobotView(objs, pose, BEHIND_DEPTH, BEHIND_OVERLAP) if pose is not None else None
     reach = Reachability(grid, pose[:3], route, objs) if (pose is not None and grid is not None) else None
+    planned: set[int] = set()  # the objects whose path is planned with the A* (the nearest PLAN_MAX)
+    if reach is not None and view is not None:
+        planned = set(np.argsort(view.centre, kind="stable")[:PLAN_MAX].tolist())
     behind_of: list[list[int]] = [[] for _ in range(n)]  # for each a: the b it lies behind
     tops = np.array([_top(o) for o in objs])
     if view is not None:
@@ -367,7 +374,7 @@ def build_scene_graph(scene: Scene, robot: Sequence[float] | None = None, grid: 
             rec["visibility"] = ("hidden" if frac >= HIDDEN_FRACTION else
                                  "partly_hidden" if frac >= PARTLY_FRACTION else "visible")
         if reach is not None:
-            app = reach.approach(o)
+            app = reach.approach(o, plan=a in planned)
             rec["reach"] = {"mode": app.mode, "goal": None if app.goal is None else [_r(v) for v in app.goal],
                             "gap": None if app.goal is None else _r(app.gap),
                             "cost": None if not math.isfinite(app.cost) else _r(app.cost),
@@ -396,6 +403,9 @@ def build_scene_graph(scene: Scene, robot: Sequence[float] | None = None, grid: 
         uncertain.append("no planning grid: reachability not computed")
     if reach is not None and reach.start_problem:
         uncertain.append(f"reachability unknown: {reach.start_problem}")
+    if reach is not None and not reach.start_problem and n > len(planned):
+        uncertain.append(f"paths planned for the nearest {len(planned)} objects only; the reachability of the other "
+                         f"{n - len(planned)} comes from the grid's connectivity (plan --goal-object ID plans one)")
     ws = None
     if grid is not None:
         w = grid.workspace

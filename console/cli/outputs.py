@@ -114,21 +114,9 @@ def check_output(out: PathLike, inputs: Iterable[Input], option: str = "--out",
 
 def write_error(exc: OSError, out: PathLike, option: str = "--out") -> OutputError:
     """An :class:`OSError` of writing ``out`` in words (no errno): for ``raise write_error(exc, out)``."""
-    import errno
+    from pipeline.file_kind import os_error_words
 
-    folder = Path(out).expanduser().parent
-    words = {
-        errno.EACCES: f"no permission to write in {folder}",
-        errno.EPERM: f"no permission to write in {folder}",
-        errno.EROFS: f"{folder} is on a read-only file system",
-        errno.ENOSPC: "the disk is full",
-        errno.EDQUOT: "the disk quota is used up",
-        errno.ENOENT: f"the folder {folder} does not exist",
-        errno.ENOTDIR: f"{folder} is not a folder",
-        errno.EISDIR: "it is a folder",
-        errno.ENAMETOOLONG: "the file name is too long",
-    }.get(exc.errno or 0, (exc.strerror or type(exc).__name__).lower())
-    return OutputError(f"{option} {out}: cannot write: {words}")
+    return OutputError(f"{option} {out}: cannot write: {os_error_words(exc, out)}")
 
 
 def write_output(out: PathLike, text: str, option: str = "--out") -> Path:
@@ -151,7 +139,10 @@ def check_folders_apart(folders: Sequence[tuple[str, "PathLike | None"]]) -> Non
     given = [(o, Path(p).expanduser().resolve()) for o, p in folders if p is not None and str(p)]
     for i, (oa, pa) in enumerate(given):
         for ob, pb in given[i + 1:]:
-            if pa == pb or pa in pb.parents or pb in pa.parents:
+            if pa == pb:
+                raise OutputError(f"{oa} {pa} and {ob} {pb}: the same folder; the console writes into {oa} and "
+                                  f"reads {ob}: give them separate folders")
+            if pa in pb.parents or pb in pa.parents:
                 raise OutputError(f"{oa} {pa} and {ob} {pb}: one folder holds the other; the console writes "
                                   f"into {oa} and reads {ob}: give them separate folders")
 
