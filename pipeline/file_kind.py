@@ -7,7 +7,7 @@ instead of being read as an empty scene.
 
 Kinds (:data:`KINDS`): scene, scene graph (``describe --json``), console session, mission,
 camera file (``camera.toml``), dataset photo JSON (intrinsics ``K`` beside a photo), dataset index,
-bench report, recording (MCAP), object catalog (TOML), photo. A JSON file is recognised from its
+simulator world file (``console --world``), bench report, recording (MCAP), object catalog (TOML), photo. A JSON file is recognised from its
 keys (:func:`kind_of_json`); other files from their first bytes and suffix (:func:`sniff`).
 
 Every input is size-checked before it is parsed (:func:`read_limited`): the limits and their numbers
@@ -71,6 +71,7 @@ KINDS: dict[str, Kind] = {k.key: k for k in (
          "give its folder to `morphonavi console --captures DIR` or `morphonavi bench DIR`"),
     Kind("dataset_index", "a dataset index (index.json)",
          "give its folder to `morphonavi bench DIR` or `morphonavi console --captures DIR`"),
+    Kind("world", "a simulator world file", "give it to `morphonavi console --world FILE`"),
     Kind("bench_report", "a bench report (written by `morphonavi bench --out`)", "it is bench's output"),
     Kind("recording", "a recording (MCAP)", "replay it with `morphonavi replay FILE.mcap`"),
     Kind("catalog", "an object catalog (TOML)", "give it to `morphonavi map --catalog` or `bench --catalog`"),
@@ -85,7 +86,7 @@ class FileKindError(ValueError):
 
 
 def kind_of_json(data: Any) -> str:
-    """The kind key of parsed JSON: ``scene``, ``session``, ``mission``, ``scene_graph``,
+    """The kind key of parsed JSON: ``scene``, ``session``, ``mission``, ``scene_graph``, ``world``,
     ``dataset_camera``, ``dataset_index``, ``bench_report`` or ``json`` (none of them)."""
     if isinstance(data, list):
         if data and all(isinstance(e, dict) and "json" in e for e in data):
@@ -93,6 +94,8 @@ def kind_of_json(data: Any) -> str:
         return "json"
     if not isinstance(data, dict):
         return "json"
+    if "morphonavi_world" in data:
+        return "world"
     if data.get("kind") == "morphonavi-session" or {"workspace", "route", "scene"} <= data.keys():
         return "session"
     if data.get("schema") == "morphonavi.scene_graph" or {"relations", "groups"} <= data.keys():
