@@ -8,11 +8,13 @@ Each model is built from a few primitives (boxes, rods, cylinders, spheres, tori
 typical size in metres, coloured per part with shades of the class colour (plus a few neutral
 accents such as black tyres), then normalised:
 
-- OBJECT frame: x = length axis (the catalog ``l``, the object's heading; its front faces +x),
-  y = width (catalog ``w``, y to the object's left), z = up (catalog ``h``). This is z-up, NOT the
-  y-up convention of glTF: the vertices are stored as they are, with no axis swap.
-- The axis-aligned bounding box is exactly ``[-0.5, 0.5]^3``: a viewer scales the mesh by
-  ``(l, w, h)`` and rotates it by the object's yaw about z to place it.
+- Built in the OBJECT frame: x = length axis (the catalog ``l``, the object's heading; its front faces
+  +x), y = width (catalog ``w``, y to the object's left), z = up (catalog ``h``).
+- Stored y-up as glTF 2.0 says (up +Y, front +Z, left +X): file ``(X, Y, Z)`` = object ``(y, z, x)``, so
+  any glTF viewer shows the model upright, and scaling the file's axes by the object's ``[w, h, l]``
+  (the scene file's size order) sizes it. :func:`pipeline.catalog.load_proxy_mesh` turns it back into
+  the object frame; Foxglove does the same turn for every glTF model (ROS REP 103, z up).
+- The axis-aligned bounding box is exactly ``[-0.5, 0.5]^3``.
 
 Colours are per-vertex (``COLOR_0``) with one matte material and no normals, so glTF viewers
 (three.js / viser) shade the faces flat. ``box.glb`` is the neutral fallback for unknown labels.
@@ -38,6 +40,9 @@ if sys.version_info >= (3, 11):
     import tomllib
 else:  # pragma: no cover - Python 3.10 only
     import tomli as tomllib
+
+OBJECT_TO_GLTF = [1, 2, 0]
+"""Column order turning object-frame vertices (x forward, y left, z up) into glTF's (X left, Y up, Z forward)."""
 
 FALLBACK_COLOR: RGB = (158, 158, 158)
 """Colour of ``box.glb``, the model of labels without a catalog entry."""
@@ -97,9 +102,11 @@ def _matte_material(tree: dict) -> None:
 
 
 def export_glb(mesh: trimesh.Trimesh, path: Path, name: str) -> None:
-    """Write ``mesh`` as a GLB with vertex colours, a matte material and no normals."""
+    """Write ``mesh`` (object frame, z up) as a y-up GLB with vertex colours, a matte material and no normals."""
+    gltf = mesh.copy()
+    gltf.vertices = mesh.vertices[:, OBJECT_TO_GLTF]  # a proper rotation: faces keep their winding
     scene = trimesh.Scene()
-    scene.add_geometry(mesh, geom_name=name, node_name=name)
+    scene.add_geometry(gltf, geom_name=name, node_name=name)
     data = trimesh.exchange.gltf.export_glb(
         scene, include_normals=False, tree_postprocessor=_matte_material
     )

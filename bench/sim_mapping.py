@@ -22,6 +22,7 @@ and views with objects cut by the border) and the captures are folded into one m
 
 from __future__ import annotations
 
+import argparse
 import math
 import os
 import sys
@@ -108,13 +109,33 @@ def measure(config: MapperConfig | None = None) -> dict[str, float]:
     return totals
 
 
+def _parse(argv: list[str]) -> argparse.Namespace:
+    from sim_tour import add_tour_options  # noqa: E402  (bench/ is on sys.path when run as a script)
+
+    parser = argparse.ArgumentParser(
+        prog="sim_mapping.py", description="Mapping error of ground-truth perception on simulator renders "
+                                           "against the hidden world (per pose and in total).")
+    parser.add_argument("--compare", action="store_true",
+                        help="also map without the yaw from depth points (every object faces the camera), "
+                             "as the baseline in the same run")
+    parser.add_argument("--tour", action="store_true",
+                        help="the map-fusion benchmark instead: a tour of captures fused into one map, beside "
+                             "the former merge (see bench/sim_tour.py)")
+    add_tour_options(parser)
+    args = parser.parse_args(argv)
+    if (args.noise or args.seed != 1) and not args.tour:
+        parser.error("--noise and --seed go with --tour")
+    return args
+
+
 if __name__ == "__main__":
-    if "--tour" in sys.argv[1:]:
+    args = _parse(sys.argv[1:])
+    if args.tour:
         from sim_tour import main as tour_main  # noqa: E402
 
-        tour_main(sys.argv[1:])
+        tour_main([a for a in sys.argv[1:] if a != "--tour"])
         sys.exit(0)
-    if "--compare" in sys.argv[1:]:
+    if args.compare:
         print("without yaw from depth points (every object faces the camera):")
         measure(MapperConfig(yaw_from_depth=False))
         print("with the default configuration:")

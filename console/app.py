@@ -13,7 +13,6 @@ address is warned about, since whoever reaches the port can drive the robot.
 from __future__ import annotations
 
 import html
-import ipaddress
 import logging
 import socket
 import threading
@@ -26,6 +25,7 @@ import viser
 
 from planner.grid import Workspace
 
+from console.hosts import LOOPBACK_NAMES, is_loopback  # noqa: F401  (importable from here as before)
 from console.views.capture_view import CaptureView
 from console.views.grid_view import GridView
 from console.session.mapping_job import MappingJob, Perceiver
@@ -45,7 +45,6 @@ log = logging.getLogger(__name__)
 
 BRAND_RGB = (0, 122, 204)
 RIGHT_PANEL_PX = 370  # width of the right-docked control panel [px]
-LOOPBACK_NAMES = ("localhost",)
 
 
 def check_listenable(host: str) -> None:
@@ -60,16 +59,6 @@ def check_listenable(host: str) -> None:
             sock.bind((addr[0], 0))
         except OSError as exc:
             raise OSError(f"cannot listen on {host!r}: {exc.strerror or exc}; is it an address of this machine?") from None
-
-
-def is_loopback(host: str) -> bool:
-    """Whether ``host`` only accepts connections from this machine."""
-    if host in LOOPBACK_NAMES:
-        return True
-    try:
-        return ipaddress.ip_address(host).is_loopback
-    except ValueError:
-        return False
 
 
 @dataclass

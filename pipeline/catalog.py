@@ -303,9 +303,10 @@ class Catalog:
 def load_proxy_mesh(path: Path | str) -> trimesh.Trimesh:
     """Load a proxy ``.glb`` as one mesh with per-vertex colours (``mesh.visual.vertex_colors``).
 
-    The mesh is in the object frame (x forward along the heading, y left, z up) with bounds
-    ``[-0.5, 0.5]^3``; scale it by ``(l, w, h)`` to place it. (glTF viewers can use the file as is,
-    e.g. ``viser``'s ``add_glb(..., scale=(l, w, h))``: the vertices are z-up, not glTF's y-up.)
+    The file is y-up as glTF 2.0 says (file ``(X, Y, Z)`` = object ``(y, z, x)``); the mesh returned is in the
+    object frame (x forward along the heading, y left, z up) with bounds ``[-0.5, 0.5]^3``: scale it by
+    ``(l, w, h)`` to place it. (A glTF viewer uses the file as is, scaled by ``[w, h, l]`` along its axes
+    and turned by :func:`pipeline.rotation.yaw_gltf_quat_wxyz`.)
 
     Raises:
         CatalogError: The file is missing or is not a mesh.
@@ -330,7 +331,17 @@ def load_proxy_mesh(path: Path | str) -> trimesh.Trimesh:
     if not meshes:
         raise CatalogError("", f"proxy model {path} has no triangles")
     mesh = _with_vertex_colors(meshes[0]) if len(meshes) == 1 else trimesh.util.concatenate(meshes)
+    mesh.vertices = object_from_gltf(mesh.vertices)
     return mesh
+
+
+GLTF_TO_OBJECT = [2, 0, 1]
+"""Column order turning glTF vertices (X left, Y up, Z forward) into the object frame (x forward, y left, z up)."""
+
+
+def object_from_gltf(vertices: np.ndarray) -> np.ndarray:
+    """Vertices of a y-up glTF proxy model in the object frame (x forward, y left, z up)."""
+    return np.asarray(vertices, dtype=np.float64)[:, GLTF_TO_OBJECT]
 
 
 def _with_vertex_colors(mesh: trimesh.Trimesh) -> trimesh.Trimesh:

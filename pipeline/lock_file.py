@@ -1,7 +1,9 @@
-"""The PID an ``fcntl.flock`` lock file holds: who has the lock (model fetches, console sessions).
+"""The PID a lock file holds: who has the lock (model fetches, console sessions).
 
-Both locks (:mod:`pipeline.models.fetch_lock`, ``console/session/session_lock.py``) write the holder's PID
-into the lock file so that a process refused or kept waiting can name it.
+Both locks (:mod:`pipeline.models.fetch_lock`, ``console/session/session_lock.py``) lock their file with
+``filelock.lock_descriptor`` (``flock`` on Unix, ``LockFileEx`` on Windows: the system drops the lock when its
+process ends, however it ends) and write the holder's PID into it so that a process refused or kept waiting
+can name it.
 """
 
 from __future__ import annotations

@@ -15,9 +15,9 @@ measured counter-clockwise about the frame's vertical axis from its x axis.
 Reading never trusts the file: :func:`scene_from_dict` checks every field and raises
 :class:`SceneError` naming the first bad one (``objects[2].size[1]: must be > 0, got -1.0``).
 
-This module holds :class:`Scene`, the plausibility check and the atomic write, and re-exports the
-data classes of :mod:`pipeline.scene_model` and the JSON functions of :mod:`pipeline.scene_json`
-(import them from here).
+This module holds the scene file's reading and writing (:func:`load_scene`, :func:`save_scene`), the
+plausibility check and the atomic write, and re-exports the data classes of :mod:`pipeline.scene_model`
+and the JSON functions of :mod:`pipeline.scene_json`: import them all from here.
 """
 
 from __future__ import annotations
@@ -26,73 +26,34 @@ import json
 import math
 import os
 import tempfile
-from dataclasses import dataclass, replace
 from pathlib import Path
-from typing import Any, Sequence
+from typing import Sequence
 
-from pipeline.scene_json import parse_json_text, scene_parts_from_dict, scene_to_dict
-from pipeline.scene_model import (FRAMES, SCENE_VERSION, Capture, Frame, SceneError, SceneObject, Sighting, Source,
-                                  Vec3)
-
-
-@dataclass(frozen=True)
-class Scene:
-    """A set of objects and the captures they were mapped from."""
-
-    objects: tuple[SceneObject, ...] = ()
-    captures: tuple[Capture, ...] = ()
-    version: int = SCENE_VERSION
-
-    def __post_init__(self) -> None:
-        ids = [o.id for o in self.objects]
-        if len(set(ids)) != len(ids):
-            dup = next(i for i in ids if ids.count(i) > 1)
-            raise SceneError("objects", f"duplicate object id {dup!r}")
-
-    def object(self, object_id: str) -> SceneObject:
-        """The object with this id (KeyError if absent)."""
-        for obj in self.objects:
-            if obj.id == object_id:
-                return obj
-        raise KeyError(object_id)
-
-    def with_objects(self, objects: Sequence[SceneObject]) -> "Scene":
-        """A copy holding ``objects`` instead."""
-        return replace(self, objects=tuple(objects))
-
-    def to_dict(self) -> dict[str, Any]:
-        """The JSON-ready dict (:func:`pipeline.scene_json.scene_to_dict`)."""
-        return scene_to_dict(self)
-
-    def to_json(self) -> str:
-        return json.dumps(scene_to_dict(self), indent=1)
-
-    def save(self, path: str | os.PathLike[str]) -> Path:
-        """Write atomically (a temporary file renamed into place): never a partial file."""
-        return write_text_atomic(Path(path), self.to_json() + "\n")
-
-    @staticmethod
-    def load(path: str | os.PathLike[str]) -> "Scene":
-        """Read and validate a scene file; raises :class:`SceneError` naming the bad field."""
-        p = Path(path)
-        try:
-            text = p.read_text(encoding="utf-8")
-        except FileNotFoundError:
-            raise SceneError("", f"scene file not found: {p}") from None
-        except (OSError, UnicodeDecodeError) as exc:
-            raise SceneError("", f"cannot read scene file {p}: {exc}") from None
-        return scene_from_json(text)
+from pipeline.scene_json import parse_json_text, scene_from_dict, scene_from_json, scene_to_dict
+from pipeline.scene_model import (FRAMES, SCENE_VERSION, Capture, Frame, Scene, SceneError, SceneObject, Sighting,
+                                  Source, Vec3)
 
 
-def scene_from_dict(data: Any) -> Scene:
-    """Validate a parsed scene dict and build the :class:`Scene` (:class:`SceneError` naming the bad field)."""
-    objects, captures = scene_parts_from_dict(data)
-    return Scene(objects=objects, captures=captures, version=SCENE_VERSION)
+def scene_to_json(scene: Scene) -> str:
+    """The scene file's text (indented JSON, without the final newline)."""
+    return json.dumps(scene_to_dict(scene), indent=1)
 
 
-def scene_from_json(text: str) -> Scene:
-    """Parse and validate scene JSON text."""
-    return scene_from_dict(parse_json_text(text))
+def save_scene(scene: Scene, path: str | os.PathLike[str]) -> Path:
+    """Write a scene file atomically (a temporary file renamed into place): never a partial file."""
+    return write_text_atomic(Path(path), scene_to_json(scene) + "\n")
+
+
+def load_scene(path: str | os.PathLike[str]) -> Scene:
+    """Read and validate a scene file; raises :class:`SceneError` naming the bad field."""
+    p = Path(path)
+    try:
+        text = p.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise SceneError("", f"scene file not found: {p}") from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise SceneError("", f"cannot read scene file {p}: {exc}") from None
+    return scene_from_json(text)
 
 
 MAX_OBJECT_SIZE = 50.0
@@ -175,5 +136,5 @@ def write_text_atomic(path: Path, text: str) -> Path:
 
 
 __all__ = ["FRAMES", "SCENE_VERSION", "Capture", "Frame", "Scene", "SceneError", "SceneObject", "Sighting", "Source",
-           "Vec3", "check_plausible", "parse_json_text", "scene_from_dict", "scene_from_json", "scene_to_dict",
-           "write_text_atomic"]
+           "Vec3", "check_plausible", "load_scene", "parse_json_text", "save_scene", "scene_from_dict",
+           "scene_from_json", "scene_to_dict", "scene_to_json", "write_text_atomic"]

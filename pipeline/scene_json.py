@@ -2,28 +2,21 @@
 
 :func:`scene_to_dict` gives the JSON-ready dict (numbers rounded: positions and sizes to 0.1 mm,
 yaw to 1e-5 rad; the fusion keys ``pinned`` / ``flags`` / ``history`` / ``sigma`` / ``cut`` only
-when set). :func:`scene_parts_from_dict` never trusts the input: every field is checked (type, finite, range)
-and the first bad one raises :class:`~pipeline.scene_model.SceneError` with its path
+when set). :func:`scene_from_dict` / :func:`scene_from_json` never trust the input: every field is checked (type,
+finite, range) and the first bad one raises :class:`~pipeline.scene_model.SceneError` with its path
 (``objects[2].size[1]: must be > 0, got -1.0``). The data classes are in :mod:`pipeline.scene_model`;
-:mod:`pipeline.scene` builds the :class:`~pipeline.scene.Scene` (``scene_from_dict``, ``scene_from_json``)
-and re-exports these functions. This module never imports :mod:`pipeline.scene`.
+:mod:`pipeline.scene` re-exports these functions and adds reading / writing files. This module never
+imports :mod:`pipeline.scene`.
 """
 
 from __future__ import annotations
 
 import json
 import math
-from typing import Any, Protocol, Sequence, cast
+from typing import Any, cast
 
-from pipeline.scene_model import (FRAMES, SCENE_VERSION, Capture, Frame, SceneError, SceneObject, Sighting, Source,
-                                  Vec3)
-
-
-class SceneLike(Protocol):
-    """What :func:`scene_to_dict` reads of a :class:`pipeline.scene.Scene`."""
-
-    objects: Sequence[SceneObject]
-    captures: Sequence[Capture]
+from pipeline.scene_model import (FRAMES, SCENE_VERSION, Capture, Frame, Scene, SceneError, SceneObject, Sighting,
+                                  Source, Vec3)
 
 
 def _source_to_dict(s: Source) -> dict[str, Any]:
@@ -95,7 +88,7 @@ def _fusion_from(r: _Reader) -> dict[str, Any]:
             "cut": tuple(cut)}
 
 
-def scene_to_dict(scene: SceneLike) -> dict[str, Any]:
+def scene_to_dict(scene: Scene) -> dict[str, Any]:
     """The JSON-ready dict of a scene (format version :data:`SCENE_VERSION`)."""
     return {
         "version": SCENE_VERSION,
@@ -237,9 +230,8 @@ def _source_from(r: _Reader) -> Source:
     )
 
 
-def scene_parts_from_dict(data: Any) -> tuple[tuple[SceneObject, ...], tuple[Capture, ...]]:
-    """Validate a parsed scene dict: its objects and captures (:func:`pipeline.scene.scene_from_dict` builds
-    the :class:`~pipeline.scene.Scene`)."""
+def scene_from_dict(data: Any) -> Scene:
+    """Validate a parsed scene dict and build the :class:`~pipeline.scene_model.Scene`."""
     root = _Reader(data, "")
     version = root.number("version")
     assert version is not None
@@ -302,7 +294,12 @@ def scene_parts_from_dict(data: Any) -> tuple[tuple[SceneObject, ...], tuple[Cap
                 models={str(k): str(v) for k, v in models.items()},
             )
         )
-    return tuple(objects), tuple(captures)
+    return Scene(objects=tuple(objects), captures=tuple(captures), version=SCENE_VERSION)
 
 
-__all__ = ["parse_json_text", "scene_to_dict", "scene_parts_from_dict"]
+def scene_from_json(text: str) -> Scene:
+    """Parse and validate scene JSON text."""
+    return scene_from_dict(parse_json_text(text))
+
+
+__all__ = ["parse_json_text", "scene_to_dict", "scene_from_dict", "scene_from_json"]

@@ -1,14 +1,14 @@
 """The scene's data classes (objects, their provenance and sightings, captures) and its field errors.
 
-Imported by :mod:`pipeline.scene_json` (the JSON form) and re-exported by :mod:`pipeline.scene`, which
-adds :class:`~pipeline.scene.Scene`; use ``pipeline.scene`` everywhere else. Frames, units and the
+Imported by :mod:`pipeline.scene_json` (the JSON form) and re-exported by :mod:`pipeline.scene` (which
+adds reading and writing files); use ``pipeline.scene`` everywhere else. Frames, units and the
 ``size`` order ``(w, h, l)`` are described in :mod:`pipeline.scene`.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
-from typing import Literal, Mapping
+from typing import Literal, Mapping, Sequence
 
 SCENE_VERSION = 1
 """Version written into every scene file; files with a newer version are rejected."""
@@ -159,3 +159,30 @@ class Capture:
     camera_quaternion: tuple[float, float, float, float] | None = None
     timings: Mapping[str, float] = field(default_factory=dict)
     models: Mapping[str, str] = field(default_factory=dict)
+
+
+@dataclass(frozen=True)
+class Scene:
+    """A set of objects and the captures they were mapped from (read and written by :mod:`pipeline.scene`:
+    ``load_scene``, ``save_scene``, ``scene_to_dict``)."""
+
+    objects: tuple[SceneObject, ...] = ()
+    captures: tuple[Capture, ...] = ()
+    version: int = SCENE_VERSION
+
+    def __post_init__(self) -> None:
+        ids = [o.id for o in self.objects]
+        if len(set(ids)) != len(ids):
+            dup = next(i for i in ids if ids.count(i) > 1)
+            raise SceneError("objects", f"duplicate object id {dup!r}")
+
+    def object(self, object_id: str) -> SceneObject:
+        """The object with this id (KeyError if absent)."""
+        for obj in self.objects:
+            if obj.id == object_id:
+                return obj
+        raise KeyError(object_id)
+
+    def with_objects(self, objects: Sequence[SceneObject]) -> "Scene":
+        """A copy holding ``objects`` instead."""
+        return replace(self, objects=tuple(objects))

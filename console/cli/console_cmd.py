@@ -7,7 +7,8 @@ import logging
 import math
 from pathlib import Path
 
-DEFAULT_SESSION = Path(".morphonavi/session")
+from console.cli.cli_args import DEFAULT_SESSION
+
 DEFAULT_SCENES = Path(".morphonavi/scenes")
 
 

@@ -92,7 +92,7 @@ def bounds_hint(graph: dict[str, Any], scene: Any, pad: float) -> str:
 
 def describe(args: argparse.Namespace) -> tuple[str, dict[str, Any]]:
     """The summary text and the graph for parsed ``describe`` arguments (raises :class:`DescribeError`)."""
-    from pipeline.scene import Scene, SceneError
+    from pipeline.scene import SceneError, load_scene
     from planner.grid import CostWeights, GridError, Workspace, build_grid
     from planner.object_goal import APPROACH_MAX
     from planner.route import Route
@@ -101,7 +101,7 @@ def describe(args: argparse.Namespace) -> tuple[str, dict[str, Any]]:
 
     robot = parse_robot(args.robot) if args.robot is not None else None
     try:
-        scene = Scene.load(args.scene)
+        scene = load_scene(args.scene)
     except SceneError as exc:
         raise DescribeError(f"{args.scene}: {exc}") from None
     except RecursionError:
@@ -154,7 +154,7 @@ def cmd_describe(args: argparse.Namespace) -> int:
 
 def add_describe_parser(subparsers: Any) -> argparse.ArgumentParser:
     """Register ``morphonavi describe``."""
-    from console.cli.morphonavi import _add_planner_args
+    from console.cli.cli_args import _add_planner_args
 
     p = subparsers.add_parser(
         "describe", help="describe a scene: objects, relations, groups, reachability (text or JSON scene graph)",

@@ -133,6 +133,7 @@ def cmd_map(args: argparse.Namespace) -> int:
     from pipeline.camera.geometry import CameraConfig, Pose, parse_pose
     from pipeline.camera.camera_file import load_camera_toml
     from pipeline.camera.image_io import read_image
+    from pipeline.scene import save_scene
     from pipeline.mapper import Mapper, prompts_from_words
     from pipeline.camera.camera_guess import widen_sigmas
 
@@ -187,7 +188,7 @@ def cmd_map(args: argparse.Namespace) -> int:
         from pipeline.debug_images import write_debug_images
 
         debug_files = write_debug_images(result, image, args.debug)
-    scene.save(out)
+    save_scene(scene, out)
     t = scene.captures[0].timings
     n_obj, n_det = len(scene.objects), len(result.objects)
     print(f"{n_obj} object{'' if n_obj == 1 else 's'} from {n_det} detection{'' if n_det == 1 else 's'} "

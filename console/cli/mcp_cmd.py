@@ -40,7 +40,7 @@ def _port(text: str) -> int:
 def cmd_mcp(args: argparse.Namespace) -> int:
     import logging
 
-    from console.cli.console_cmd import DEFAULT_SESSION  # noqa: F401 (same default folder)
+    from console.cli.cli_args import DEFAULT_SESSION  # noqa: F401 (same default folder)
     from console.cli.errors import CliError
     from console.mcp.control_api import ConsoleBridge, ConsoleUnavailable
 
@@ -76,7 +76,7 @@ def cmd_mcp(args: argparse.Namespace) -> int:
 
 def add_mcp_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:  # type: ignore[type-arg]
     """Register ``morphonavi mcp``."""
-    from console.cli.console_cmd import DEFAULT_SESSION
+    from console.cli.cli_args import DEFAULT_SESSION
 
     p = sub.add_parser(
         "mcp", help="MCP server for language-model agents, attached to a running console (stdio; --http)",

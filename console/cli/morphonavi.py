@@ -8,38 +8,8 @@ import sys
 from pathlib import Path
 from typing import Callable, Sequence
 
+from console.cli.cli_args import _add_planner_args, _vec3, package_version
 from console.cli.errors import CliError
-
-
-def _numbers(option: str, counts: tuple[int, ...], form: str) -> Callable[[str], list[float]]:
-    """An argparse ``type`` for a comma-separated list of finite numbers (negative ones included)."""
-    from pipeline.option_values import ValueListError, parse_numbers
-
-    def parse(text: str) -> list[float]:
-        try:
-            return parse_numbers(text, option, counts, form)
-        except ValueListError as exc:
-            raise argparse.ArgumentTypeError(str(exc)) from None
-
-    parse.__name__ = form  # argparse names the type in some messages
-    return parse
-
-
-def _vec3(option: str) -> Callable[[str], tuple[float, float, float]]:
-    parse = _numbers(option, (3,), "x,y,z in metres")
-
-    def vec3(text: str) -> tuple[float, float, float]:
-        v = parse(text)
-        return (v[0], v[1], v[2])
-
-    return vec3
-
-
-def _bounds(text: str) -> tuple[tuple[float, float, float], tuple[float, float, float]]:
-    v = _numbers("--bounds", (6,), "xmin,ymin,zmin,xmax,ymax,zmax in metres")(text)
-    if not (v[0] < v[3] and v[1] < v[4] and v[2] < v[5]):
-        raise argparse.ArgumentTypeError(f"--bounds: every minimum must be below its maximum, got {text!r}")
-    return (v[0], v[1], v[2]), (v[3], v[4], v[5])
 
 
 def join_negative_values(parser: argparse.ArgumentParser, argv: Sequence[str]) -> list[str]:
@@ -84,20 +54,8 @@ def join_negative_values(parser: argparse.ArgumentParser, argv: Sequence[str]) -
 # --- plan ---------------------------------------------------------------------------------------
 
 
-def _add_planner_args(p: argparse.ArgumentParser) -> None:
-    g = p.add_argument_group("grid and costs (world frame, metres)")
-    g.add_argument("--bounds", type=_bounds, default=((0.0, 0.0, 0.0), (5.0, 8.0, 3.0)),
-                   help="workspace 'xmin,ymin,zmin,xmax,ymax,zmax' (default: the paper's 5 x 8 x 3 m room)")
-    g.add_argument("--resolution", type=float, default=0.25, help="cell size [m] (default 0.25)")
-    g.add_argument("--margin", type=float, default=0.35, help="robot radius: dangerous margin [m] (default 0.35)")
-    g.add_argument("--w-ground", type=float, default=1.0, help="ground layer cost per metre")
-    g.add_argument("--w-takeoff", type=float, default=12.0, help="first air layer (take-off/landing) cost per metre")
-    g.add_argument("--w-flight", type=float, default=3.0, help="higher layers cost per metre")
-    g.add_argument("--w-danger", type=float, default=5.0, help="multiplier for dangerous cells")
-
-
 def cmd_plan(args: argparse.Namespace) -> int:
-    from pipeline.scene import Scene, SceneError
+    from pipeline.scene import SceneError, load_scene
     from planner.grid import CostWeights, GridError, Workspace, build_grid
     from planner.mission import MissionError
     from planner.route import Route
@@ -110,7 +68,7 @@ def cmd_plan(args: argparse.Namespace) -> int:
     if not out.parent.is_dir():
         raise CliError(f"--out {out}: the folder {out.parent} does not exist")
     try:
-        scene = Scene.load(args.scene)
+        scene = load_scene(args.scene)
     except SceneError as exc:
         raise CliError(f"{args.scene}: {exc}") from None
     except RecursionError:
@@ -207,6 +165,7 @@ def build_parser() -> argparse.ArgumentParser:
         prog="morphonavi",
         description="Monocular mapping, Aerial-Ground A* planning and a browser console for an aerial-ground robot.",
     )
+    parser.add_argument("--version", action="version", version=f"%(prog)s {package_version()}")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
 
     from console.cli.object_goal_cli import object_stop

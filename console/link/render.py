@@ -95,7 +95,9 @@ def _load_unit_mesh(path: str) -> tuple[np.ndarray, np.ndarray, np.ndarray] | No
         return None
     if not isinstance(mesh, trimesh.Trimesh) or len(mesh.faces) == 0:
         return None
-    v = np.asarray(mesh.vertices, dtype=np.float64)
+    from pipeline.catalog import object_from_gltf
+
+    v = object_from_gltf(mesh.vertices)  # the file is y-up (glTF); the renderer works in the object frame
     lo, hi = v.min(axis=0), v.max(axis=0)
     span = np.where(hi - lo > 1e-9, hi - lo, 1.0)
     v = (v - (lo + hi) / 2) / span  # exactly the unit cube, whatever the file's rounding

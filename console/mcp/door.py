@@ -86,7 +86,7 @@ def _number(args: Mapping[str, Any], name: str, default: float | None = None) ->
 def link_is_real(robot_spec: str) -> bool:
     """Whether the console's robot link reaches beyond this machine: a serial port, or a network
     address other than loopback (``mavlink:udpin:0.0.0.0:14550`` listens on every interface)."""
-    from console.app import is_loopback
+    from console.hosts import is_loopback
 
     text = (robot_spec or "").strip()
     if text == "sim" or text.startswith("sim:"):

@@ -28,6 +28,8 @@ import time
 from pathlib import Path
 from typing import Any, Callable
 
+from pipeline.scene import scene_to_dict
+
 from console.recording import recording_schemas as rs
 from console.session.session_types import Notice, RobotSnapshot
 from console.session.topics import AGENT, CAPTURE, GRID, JOB, MISSION, NOTICE, ROBOT, ROUTE, RUN, SCENE, SELECTION, SETTINGS
@@ -311,7 +313,7 @@ class Recorder:
         elif topic == rs.SESSION_INFO:
             self._encode(rs.SESSION_INFO, ns, payload)
         elif topic == SCENE:
-            self._encode(rs.SCENE_JSON, ns, payload.to_dict())
+            self._encode(rs.SCENE_JSON, ns, scene_to_dict(payload))
             proxies = self._proxy_models()
             self._encode(rs.MAP, ns, rs.map_update(payload, ns, proxies.color, proxies.glb, self._map_ids))
             self._map_ids = tuple(o.id for o in payload.objects)

@@ -19,13 +19,14 @@ from typing import Any, Mapping, Sequence
 import numpy as np
 from foxglove import messages as fm
 
+from pipeline.rotation import yaw_quat_xyzw
 from pipeline.scene import Scene
 from planner.grid import CellState, PlanningGrid
 from planner.mission import Mission
 
 from console.session.session_types import CaptureRecord, Notice, RobotSnapshot, RouteSnapshot, RunStatus
 
-# topic -> (schema name, message encoding); JSON topics carry a permissive JSON schema
+# topic -> (schema name, message encoding); JSON topics carry the schemas of console.recording.channel_schemas
 POSE = "/robot/pose"
 TF = "/tf"
 ROBOT_STATE = "/robot/state"
@@ -78,7 +79,7 @@ def _pose(translation: Sequence[float], quat_xyzw: Sequence[float]) -> fm.Pose:
 
 
 def _yaw_pose(position: Sequence[float], yaw: float) -> fm.Pose:
-    return _pose(position, (0.0, 0.0, math.sin(yaw / 2), math.cos(yaw / 2)))
+    return _pose(position, yaw_quat_xyzw(yaw))
 
 
 def _color(rgba: Sequence[float]) -> fm.Color:
@@ -177,7 +178,8 @@ def map_update(scene: Scene, ns: int, color_of: Any, glb_of: Any, prev_ids: Sequ
 
     Args:
         color_of: ``label -> (r, g, b)`` in 0..255.
-        glb_of: ``label -> bytes | None``: the proxy model (a unit cube GLB: x = length, y = width, z = up).
+        glb_of: ``label -> bytes | None``: the proxy model (a unit-cube GLB, y-up as glTF says; Foxglove turns glTF models into
+            its z-up frame, x = length, y = width, z = up, so the pose is the yaw and the scale ``(l, w, h)``).
         prev_ids: Object ids of the previous update: those gone are deleted.
     """
     ts = stamp(ns)

@@ -10,18 +10,17 @@ from __future__ import annotations
 
 from collections import deque
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 from pipeline.scene import Scene
 from planner.grid import PlanningGrid
 from planner.mission import Mission
 from planner.route import Route
 
+from console.session.session_core import SessionCore
 from console.session.session_types import CaptureRecord, SessionError
 from console.session.topics import CAPTURE, GRID, MISSION, ROUTE, SCENE, SELECTION
 
-if TYPE_CHECKING:
-    from console.session.session import Session
 
 HISTORY_DEPTH = 20
 """How many edits can be undone, newest first."""
@@ -83,22 +82,22 @@ class History:
         self._states.clear()
 
 
-class Undo:
+class Undo(SessionCore):
     """The undo half of :class:`~console.session.session.Session` (mixed into it; uses its lock and state)."""
 
-    def _remember_locked(self: "Session", label: str, key: str = "") -> None:
+    def _remember_locked(self, label: str, key: str = "") -> None:
         """Push the state before an edit."""
         self._history.push(SceneState(label, self._scene, self._grid, self._route.to_dict(), self._mission,
                                       self._capture, self._capture_meta, key, getattr(self, "_known", None)))
 
     @property
-    def undo_label(self: "Session") -> str | None:
+    def undo_label(self) -> str | None:
         """What :meth:`undo_edit` would undo (``move box-3``), or ``None`` when there is nothing."""
         with self._lock:
             top = self._history.peek()
             return None if top is None else top.label
 
-    def undo_edit(self: "Session") -> str:
+    def undo_edit(self) -> str:
         """Put the map back as it was before the last spawn, move, delete, capture or load.
 
         Scene, grid, registered route, mission and last capture come back together; the route start

@@ -30,6 +30,7 @@ from console.link.base import CaptureResult
 from console.session.model_preload import ModelPreload
 
 from console.session.session import CaptureRecord, Detection, JobStatus, Session, SessionError
+from console.session.session_types import MappingError
 
 log = logging.getLogger(__name__)
 
@@ -84,10 +85,6 @@ def capture_id(shot: CaptureResult) -> str:
     """A capture id for the session: the photo's name when it has one, else a fresh id."""
     stem = "".join(c if c.isalnum() or c in "-_" else "_" for c in (shot.name or ""))[:40]
     return f"cap-{stem}-{uuid.uuid4().hex[:4]}" if stem else f"cap-{uuid.uuid4().hex[:8]}"
-
-
-class MappingError(RuntimeError):
-    """Capture or perception failed; the message is for the operator."""
 
 
 class MappingJob:

@@ -18,6 +18,7 @@ import time
 from typing import Any, Callable
 
 from console.session.session import JobStatus, Session
+from console.session.session_types import MappingError
 
 log = logging.getLogger(__name__)
 
@@ -137,8 +138,6 @@ class ModelPreload:
             if preload is not None:
                 preload(self._progress)
         except Exception as exc:  # MappingError carries an operator-facing message; anything else is a bug
-            from console.session.mapping_job import MappingError
-
             if not isinstance(exc, MappingError):
                 log.exception("model preload crashed")
             text = str(exc) if isinstance(exc, MappingError) else f"internal error while loading the models: {exc!r}"

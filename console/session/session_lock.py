@@ -1,7 +1,7 @@
 """One console per session folder: an exclusive lock held while the console runs.
 
-The lock is ``console.lock`` in the session folder, locked with ``fcntl.flock`` and holding the
-owner's PID. The kernel drops the lock when its process ends, however it ends, so a lock left by
+The lock is ``console.lock`` in the session folder, locked with ``filelock.lock_descriptor`` (``flock`` on
+Unix, ``LockFileEx`` on Windows) and holding the owner's PID. The system drops the lock when its process ends, however it ends, so a lock left by
 a dead console is simply taken over (its PID is reported as :attr:`SessionLock.previous_pid`).
 A second console on the same folder is refused with a :class:`SessionError` naming the PID of the
 console that holds it. A folder this process cannot write is not locked (nothing can be saved
@@ -11,10 +11,11 @@ over there); :attr:`SessionLock.held` is then False.
 from __future__ import annotations
 
 import errno
-import fcntl
 import logging
 import os
 from pathlib import Path
+
+from filelock import lock_descriptor
 
 from pipeline.lock_file import pid_in, write_pid
 
@@ -38,21 +39,21 @@ def _alive(pid: int) -> bool:
 def holder(folder: str | Path) -> int | None:
     """The PID of the running console that holds ``folder``'s lock (0 if unknown), or ``None`` when free.
 
-    Only looks: opens the lock file read-only and tries a shared lock, which a console's exclusive
-    lock refuses. A folder without a lock file (or one that cannot be read) has no holder.
+    Only looks: opens the lock file read-only and tries the lock without waiting, which a console's
+    lock refuses (taken, it is dropped at once). A folder without a lock file (or one that cannot be read)
+    has no holder.
     """
     try:
         fd = os.open(Path(folder) / LOCK_FILE, os.O_RDONLY)
     except OSError:
         return None
     try:
-        fcntl.flock(fd, fcntl.LOCK_SH | fcntl.LOCK_NB)
-    except BlockingIOError:
-        return pid_in(fd) or 0
+        if not lock_descriptor(fd, blocking=False):
+            return pid_in(fd) or 0
     except OSError:
         return None
     finally:
-        os.close(fd)  # also drops the shared lock if it was taken
+        os.close(fd)  # also drops the lock if it was taken
     return None
 
 
@@ -88,16 +89,17 @@ class SessionLock:
                 log.warning("session folder %s is not writable: not locked (nothing can be saved there)", self.folder)
                 return self
         try:
-            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            taken = lock_descriptor(fd, blocking=False)
         except OSError as exc:
+            os.close(fd)
+            raise SessionError(f"cannot lock the session folder {self.folder}: {exc.strerror or exc}") from None
+        if not taken:
             pid = pid_in(fd)
             os.close(fd)
-            if exc.errno in (errno.EWOULDBLOCK, errno.EAGAIN, errno.EACCES):
-                who = f"PID {pid}" if pid is not None else "an unknown process"
-                raise SessionError(
-                    f"the session folder {self.folder} is in use by another console ({who}): stop that console, "
-                    "or start this one with --session DIR (another folder)") from None
-            raise SessionError(f"cannot lock the session folder {self.folder}: {exc.strerror or exc}") from None
+            who = f"PID {pid}" if pid is not None else "an unknown process"
+            raise SessionError(
+                f"the session folder {self.folder} is in use by another console ({who}): stop that console, "
+                "or start this one with --session DIR (another folder)")
         old = pid_in(fd)
         if old is not None and old != os.getpid():
             self.previous_pid = old
@@ -117,7 +119,7 @@ class SessionLock:
             os.ftruncate(fd, 0)
         except OSError:
             pass
-        os.close(fd)  # closing releases the flock
+        os.close(fd)  # closing releases the lock
         self.held = False
 
     def __enter__(self) -> "SessionLock":

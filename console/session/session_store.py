@@ -24,7 +24,7 @@ import shutil
 import time
 from dataclasses import dataclass, replace
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 from pipeline.scene import Scene, SceneError, check_plausible, scene_from_dict, scene_to_dict, write_text_atomic
 from planner.grid import Workspace, build_grid
@@ -32,11 +32,10 @@ from planner.mission import Mission, MissionError
 from planner.route import Route
 
 from console.session.capture_files import read_capture_files, write_capture_files
+from console.session.session_core import SessionCore
 from console.session.session_types import CaptureRecord, Notice, SessionError, Settings
 from console.session.topics import CAPTURE, GRID, MISSION, ROUTE, SCENE, SELECTION, SETTINGS
 
-if TYPE_CHECKING:
-    from console.session.session import Session
 
 log = logging.getLogger(__name__)
 
@@ -316,7 +315,7 @@ def keep_aside(path: Path, reason: str, move: bool) -> Path:
     return kept
 
 
-class Persistence:
+class Persistence(SessionCore):
     """The save / load / restore half of :class:`~console.session.session.Session` (mixed into it).
 
     Uses the session's lock and state; every restored value is checked by :func:`parse_saved` and
@@ -324,7 +323,7 @@ class Persistence:
     """
 
     # --- names, listing, writing ---------------------------------------------------------------
-    def resolve_name(self: "Session", name: str) -> Path:
+    def resolve_name(self, name: str) -> Path:
         """The session-folder file a typed name refers to (``.json`` added if missing).
 
         Raises :class:`SessionError` for empty names, absolute paths, odd characters, and any name
@@ -332,11 +331,11 @@ class Persistence:
         """
         return resolve_name(self.folder, name)
 
-    def list_saves(self: "Session") -> list[str]:
+    def list_saves(self) -> list[str]:
         """Names of the session files in the session folder (newest first)."""
         return list_saves(self.folder)
 
-    def to_dict(self: "Session") -> dict[str, Any]:
+    def to_dict(self) -> dict[str, Any]:
         """The whole persistent state as a JSON-ready dict."""
         with self._lock:
             data = session_to_dict(self._workspace, self._margin, self._scene, self._route,
@@ -344,7 +343,7 @@ class Persistence:
             data.update(self._known_json_locked())  # type: ignore[attr-defined]  # KnownSpaceSession
             return data
 
-    def save(self: "Session", name: str | None = None) -> Path:
+    def save(self, name: str | None = None) -> Path:
         """Write the session to ``session.json`` or to the typed ``name`` in the session folder."""
         path = self.folder / SESSION_FILE if name is None else self.resolve_name(name)
         with self._lock:
@@ -356,18 +355,18 @@ class Persistence:
         return path
 
     @property
-    def save_error(self: "Session") -> str | None:
+    def save_error(self) -> str | None:
         """Why the last autosave failed (changes are not being saved), or ``None`` when saving works."""
         with self._lock:
             return self._last_save_error
 
     @property
-    def restore_problems(self: "Session") -> tuple[str, ...]:
+    def restore_problems(self) -> tuple[str, ...]:
         """What the last restore at start-up could not bring back, and why (for the page)."""
         with self._lock:
             return tuple(self._restore_problems)
 
-    def _save_locked(self: "Session") -> None:
+    def _save_locked(self) -> None:
         """Autosave; a failure (or a recovery) is announced to every tab once, not once per save."""
         if not self._autosave:
             return
@@ -388,7 +387,7 @@ class Persistence:
             self._outbox.append(Notice("Saving again", f"{path.name} is written after every change again", "success"))
         self._last_save_error = None
 
-    def _store_capture_locked(self: "Session", rec: CaptureRecord) -> dict[str, Any] | None:
+    def _store_capture_locked(self, rec: CaptureRecord) -> dict[str, Any] | None:
         """Write the capture's files; their metadata, or ``None`` (logged) if they cannot be stored."""
         try:
             return write_capture_files(self.folder, rec)
@@ -397,7 +396,7 @@ class Persistence:
             return None
 
     # --- loading -------------------------------------------------------------------------------
-    def load(self: "Session", name: str | None = None) -> list[str]:
+    def load(self, name: str | None = None) -> list[str]:
         """Replace the state with a saved session; returns notes about what could not be kept.
 
         Raises :class:`SessionError` naming the bad field when the file cannot be used at all; the
@@ -412,7 +411,7 @@ class Persistence:
         self._emit_all()
         return notes
 
-    def restore_last(self: "Session") -> list[str] | None:
+    def restore_last(self) -> list[str] | None:
         """Restore ``session.json`` at start-up; ``None`` if nothing was restored.
 
         A file that cannot be used is moved aside (``session.json.unreadable-<time>``) and the
@@ -446,12 +445,12 @@ class Persistence:
         self._emit_all()
         return notes
 
-    def _emit_all(self: "Session") -> None:
+    def _emit_all(self) -> None:
         cap = self.capture
         self._emit([(SCENE, None), (GRID, None), (ROUTE, None), (MISSION, None), (SETTINGS, None),
                     (SELECTION, None)] + ([(CAPTURE, cap)] if cap is not None else []))
 
-    def _apply_saved(self: "Session", saved: SavedSession, where: str, remember: str | None) -> list[str]:
+    def _apply_saved(self, saved: SavedSession, where: str, remember: str | None) -> list[str]:
         """Swap the checked parts in; returns the problems and notes for the operator."""
         notes = list(saved.problems) + list(saved.notes)
         mission = saved.mission
@@ -483,7 +482,7 @@ class Persistence:
             self._save_locked()
         return notes
 
-    def status_text(self: "Session") -> tuple[str, bool]:
+    def status_text(self) -> tuple[str, bool]:
         """What the page says about saving and the last restore, and whether it is a warning."""
         with self._lock:
             err, problems, auto = self._last_save_error, list(self._restore_problems), self._autosave

@@ -23,6 +23,11 @@ class SessionError(ValueError):
     """An operator request that cannot be carried out; the message says why."""
 
 
+class MappingError(RuntimeError):
+    """Capture or perception failed; the message is for the operator (raised by the mapping job and the
+    model preload; importable from :mod:`console.session.mapping_job` too)."""
+
+
 def fmt_point(p: Sequence[float]) -> str:
     """A point for an operator message: ``(x, y[, z])`` with two decimals [m]."""
     return "(" + ", ".join(f"{v:.2f}" for v in p) + ")"

@@ -1,8 +1,8 @@
 """Mapped objects in the 3D view: one labelled proxy mesh per object, selection, delete and move.
 
-Each object is drawn with its catalog proxy model (a unit-cube GLB in the object frame: x along
-the heading = length, y = width, z = up), scaled by ``(l, w, h)``, turned by its yaw about +z and
-placed at its box centre (world frame [m]). Labels without a catalog model, or a missing catalog,
+Each object is drawn with its catalog proxy model (a unit-cube GLB, y-up as glTF says: X = width,
+Y = up, Z = length along the heading), scaled by ``[w, h, l]`` along those axes, turned into the z-up world
+and by its yaw about +z, and placed at its box centre (world frame [m]). Labels without a catalog model, or a missing catalog,
 fall back to a plain box. Clicking an object (or choosing it in the list) selects it: its details
 appear in the panel, where it can be moved (typed centre and yaw, or dragged with a gizmo that slides
 it on its support and turns it about +z) or deleted.
@@ -22,6 +22,7 @@ from typing import Any, Callable, Sequence
 
 import viser
 
+from pipeline.rotation import quat_wxyz_yaw, yaw_gltf_quat_wxyz, yaw_quat_wxyz
 from pipeline.scene import SceneObject
 
 from console.views.client_notice import tell
@@ -39,15 +40,8 @@ DROP_TOLERANCE_RAD = 1e-3  # ... nor turn [rad]
 Vec3 = tuple[float, float, float]
 
 
-def yaw_wxyz(yaw: float) -> tuple[float, float, float, float]:
-    """Quaternion ``(w, x, y, z)`` of a turn by ``yaw`` [rad] about +z."""
-    return (math.cos(yaw / 2), 0.0, 0.0, math.sin(yaw / 2))
-
-
-def wxyz_yaw(wxyz: Sequence[float]) -> float:
-    """Heading [rad] about +z of a rotation given as a quaternion ``(w, x, y, z)``."""
-    w, x, y, z = (float(v) for v in wxyz)
-    return math.atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z))
+yaw_wxyz = yaw_quat_wxyz  # viser's scene nodes take (w, x, y, z): pipeline.rotation says the orders
+wxyz_yaw = quat_wxyz_yaw
 
 
 def label_color(label: str) -> tuple[int, int, int]:
@@ -244,7 +238,9 @@ class ObjectsView:
         glb = self._models.glb(obj.label)
         name = f"/objects/{key}"
         if glb is not None:
-            mesh = self._server.scene.add_glb(name, glb, scale=l_w_h, wxyz=wxyz, position=obj.position)
+            # the GLB is y-up (glTF): turned into the z-up scene and scaled by [w, h, l] along its own axes
+            mesh = self._server.scene.add_glb(name, glb, scale=tuple(obj.size), wxyz=yaw_gltf_quat_wxyz(obj.yaw),
+                                              position=obj.position)
         else:
             mesh = self._server.scene.add_box(name, color=self._models.color(obj.label), dimensions=l_w_h,
                                               wxyz=wxyz, position=obj.position, opacity=0.95)

@@ -1,4 +1,4 @@
-"""One fetch at a time per model folder: an exclusive ``fcntl.flock`` on ``<folder>/.fetch.lock``.
+"""One fetch at a time per model folder: an exclusive lock on ``<folder>/.fetch.lock`` (``filelock``).
 
 Like the console's session lock (``console/session/session_lock.py``): the lock file holds the owner's PID
 and the kernel drops the lock when its process ends, however it ends. A second fetch of the same
@@ -11,10 +11,11 @@ cannot write is not locked (nothing can be fetched into it; the files already th
 from __future__ import annotations
 
 import errno
-import fcntl
 import os
 from pathlib import Path
 from typing import Callable
+
+from filelock import lock_descriptor
 
 from pipeline.lock_file import pid_in, write_pid
 
@@ -48,15 +49,13 @@ class FetchLock:
                 if exc.errno in _READ_ONLY:
                     return self  # cannot write here: nothing will be written, so nothing to guard
                 raise
-            try:
-                fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-            except BlockingIOError:
+            if not lock_descriptor(fd, blocking=False):
                 pid = pid_in(fd)
                 if self.waited_for is None:
                     self.waited_for = pid or 0
                     self.log(f"waiting for another fetch of {self.what} (pid {pid if pid else 'unknown'}) "
                              f"into {self.folder}")
-                fcntl.flock(fd, fcntl.LOCK_EX)  # the kernel releases it when that process ends, however it ends
+                lock_descriptor(fd, blocking=True, poll_interval=0.05)  # released when that process ends, however it ends
             try:
                 same = os.stat(self.path).st_ino == os.fstat(fd).st_ino
             except FileNotFoundError:

@@ -2,7 +2,8 @@
 
 Two steps, run by ``morphonavi models fetch oidv4_ssd``:
 
-1. ``tflite2onnx`` (pip, a dependency) converts the TFLite file to a *raw* ONNX
+1. ``tflite2onnx`` (pip, the optional extra ``morphonavi[ssd-convert]``: only this one-time conversion
+   needs it) converts the TFLite file to a *raw* ONNX
    graph: input ``normalized_input_image_tensor`` float32 ``[1, 3, 300, 300]`` (NCHW; fp16 weights
    become fp32), outputs ``raw_outputs/box_encodings`` ``[1, N, 4]`` (``ty, tx, th, tw`` per anchor)
    and ``raw_outputs/class_predictions`` ``[1, N, C]`` (logits). tflite2onnx lists initializers in a
@@ -42,7 +43,8 @@ INPUT = "normalized_input_image_tensor"
 RAW_BOXES = "raw_outputs/box_encodings"
 RAW_SCORES = "raw_outputs/class_predictions"
 TFLITE2ONNX_VERSION = "0.4.1"
-INSTALL_HINT = f"pip install 'tflite2onnx=={TFLITE2ONNX_VERSION}' (a dependency of morphonavi: reinstall it, e.g. pip install -e .)"
+INSTALL_HINT = (f"pip install 'morphonavi[ssd-convert]' (from a source checkout: pip install -e '.[ssd-convert]'), "
+                f"which installs tflite2onnx=={TFLITE2ONNX_VERSION}; only this one-time conversion needs it")
 
 
 @dataclass(frozen=True)

@@ -11,7 +11,7 @@ import pytest
 
 from console.cli.morphonavi import main
 from console.link.world import paper_room
-from pipeline.scene import Capture, Scene, SceneObject
+from pipeline.scene import Capture, Scene, SceneObject, save_scene
 from planner.mission import Mission
 from planner.scene_graph_schema import SCENE_GRAPH_SCHEMA
 
@@ -20,7 +20,7 @@ ROBOT = "2.5,0.7,0,90"
 
 @pytest.fixture(scope="module")
 def room(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    return paper_room().save(tmp_path_factory.mktemp("scene") / "room.json")
+    return save_scene(paper_room(), tmp_path_factory.mktemp("scene") / "room.json")
 
 
 def _run(capsys: pytest.CaptureFixture[str], *argv: str) -> tuple[int, str, str]:
@@ -55,7 +55,7 @@ def test_describe_takes_the_robot_pose_from_the_latest_capture(tmp_path: Path, c
         captures=(Capture("old", 1.0, robot_pose={"x": 2.5, "y": 6.0, "z": 0.0, "yaw": 0.0}),
                   Capture("new", 2.0, robot_pose={"x": 2.5, "y": 1.0, "z": 0.0, "yaw": math.pi / 2})),
     )
-    path = scene.save(tmp_path / "s.json")
+    path = save_scene(scene, tmp_path / "s.json")
     code, out, _ = _run(capsys, "describe", str(path))
     assert code == 0
     assert "2.0 m ahead" in out and "robot pose from the scene's latest capture" in out
@@ -154,7 +154,7 @@ def test_describe_far_objects_points_to_bounds_and_sunk_ones_are_below_the_floor
         SceneObject("car-2", "car", (74.0, -2.0, 0.75), (1.8, 1.5, 4.5)),
         SceneObject("table-1", "table", (2.5, 3.0, 0.375 - 0.44), (0.8, 0.75, 1.2)),
     ))
-    path = scene.save(tmp_path / "street.json")
+    path = save_scene(scene, tmp_path / "street.json")
     code, out, err = _run(capsys, "describe", str(path), "--robot", "1,1,0,0")
     assert code == 0, err
     for car in ("car-1", "car-2"):
@@ -178,7 +178,7 @@ def test_describe_far_objects_points_to_bounds_and_sunk_ones_are_below_the_floor
 def test_describe_robot_outside_the_workspace_points_to_bounds(tmp_path: Path,
                                                               capsys: pytest.CaptureFixture[str]) -> None:
     scene = Scene(objects=(SceneObject("chair-1", "office_chair", (2.5, 3.0, 0.5), (0.6, 1.0, 0.6)),))
-    path = scene.save(tmp_path / "s.json")
+    path = save_scene(scene, tmp_path / "s.json")
     code, out, err = _run(capsys, "describe", str(path), "--robot", "-3,1,0,0")
     assert code == 0, err
     assert "reachability unknown: robot (-3.00, 1.00, 0.00) is outside the workspace" in out
@@ -194,7 +194,7 @@ def test_describe_robot_outside_the_workspace_points_to_bounds(tmp_path: Path,
 
 def test_plan_goal_object_outside_the_workspace_names_bounds(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     scene = Scene(objects=(SceneObject("car-1", "car", (58.0, 3.0, 0.75), (1.8, 1.5, 4.5)),))
-    path = scene.save(tmp_path / "street.json")
+    path = save_scene(scene, tmp_path / "street.json")
     code, _, err = _run(capsys, "plan", str(path), "--start", "1,1,0", "--goal-object", "car",
                         "--out", str(tmp_path / "m.json"))
     assert code == 2 and "outside the planning workspace" in err and "widen the workspace with --bounds" in err, err

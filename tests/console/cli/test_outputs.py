@@ -9,7 +9,7 @@ from pathlib import Path
 import pytest
 
 from console.cli.outputs import InputFolder, OutputError, check_folders_apart, check_output, write_output
-from pipeline.scene import Scene, SceneObject, write_text_atomic
+from pipeline.scene import Scene, SceneObject, save_scene, write_text_atomic
 
 
 def _mode(p: Path) -> int:
@@ -21,7 +21,7 @@ def test_atomic_write_honours_umask(tmp_path: Path, umask: int) -> None:
     old = os.umask(umask)
     try:
         out = write_text_atomic(tmp_path / "a.json", "{}\n")
-        scene = Scene((SceneObject("a", "chair", (1.0, 1.0, 0.4), (0.5, 0.8, 0.5)),)).save(tmp_path / "s.json")
+        scene = save_scene(Scene((SceneObject("a", "chair", (1.0, 1.0, 0.4), (0.5, 0.8, 0.5)),)), tmp_path / "s.json")
     finally:
         os.umask(old)
     assert _mode(out) == 0o666 & ~umask

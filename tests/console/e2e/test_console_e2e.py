@@ -31,7 +31,7 @@ REPO = Path(__file__).resolve().parents[3]
 from console.app import ConsoleApp, ConsoleConfig, is_loopback, wait_until  # noqa: E402
 from console.session.topics import RUN  # noqa: E402
 from console.session.mapping_job import JOB_NAME  # noqa: E402
-from pipeline.scene import Scene, SceneObject  # noqa: E402
+from pipeline.scene import Scene, SceneObject, save_scene  # noqa: E402
 
 
 def _browser_missing() -> str | None:
@@ -177,8 +177,10 @@ def test_operator_maps_the_room_and_builds_a_mission(console: ConsoleApp, tmp_pa
             client = next(iter(app.server.get_clients().values()))
             canvas = page.locator("canvas").first.bounding_box()
             assert canvas is not None
-            behind_the_line = [(x, y) for y in (6.8, 6.4, 7.2, 6.0, 5.6) for x in (2.0, 2.6, 1.4, 3.2, 3.8, 0.8)]
-            target, px = _clear_floor_pixel(app, client.camera, behind_the_line)
+            # a floor point the photo saw free (behind the line nothing is seen yet: refused, see
+            # tests/console/e2e/test_look_known_space_e2e.py)
+            seen = [(x, y) for y in (2.6, 2.2, 2.0, 1.8) for x in (2.6, 2.4, 2.8)]
+            target, px = _clear_floor_pixel(app, client.camera, seen)
             sx = canvas["width"] / client.camera.image_width
             sy = canvas["height"] / client.camera.image_height
             page.mouse.click(canvas["x"] + px[0] * sx, canvas["y"] + px[1] * sy)
@@ -284,7 +286,7 @@ def test_dropped_scene_files_spawn_and_a_restart_restores_the_session(tmp_path: 
         session.subscribe(lambda t, p: notices.append(p) if t == NOTICE else None)
         # the robot's frame: 2 m ahead of the robot, which starts at (2.5, 0.7) facing +y
         ahead = Scene(objects=(SceneObject("crate", "cardboard_box", (2.0, 0.0, 0.3), (0.6, 0.6, 0.6), frame="robot"),))
-        ahead.save(tmp_path / "scenes" / "drop.json")
+        save_scene(ahead, tmp_path / "scenes" / "drop.json")
         assert wait_until(lambda: len(session.scene.objects) == 1, 10), notices
         crate = session.scene.object("crate")
         assert crate.frame == "world" and crate.position == pytest.approx((2.5, 2.7, 0.3), abs=1e-6)

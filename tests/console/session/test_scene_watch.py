@@ -13,7 +13,7 @@ import pytest
 
 from console.session.scene_watch import FrameError, NotReady, SceneWatcher, objects_to_world
 from pipeline.camera.geometry import CameraMount, Pose, camera_pose_in_world
-from pipeline.scene import Capture, Scene, SceneObject, Source
+from pipeline.scene import Capture, Scene, SceneObject, Source, save_scene
 
 
 def _line_of_boxes(y: float = 4.0) -> Scene:
@@ -27,7 +27,7 @@ def _line_of_boxes(y: float = 4.0) -> Scene:
 
 
 def _write_scene(path: Path, scene: Scene, age: float = 1.0) -> None:
-    scene.save(path)
+    save_scene(scene, path)
     t = time.time() - age
     os.utime(path, (t, t))
 

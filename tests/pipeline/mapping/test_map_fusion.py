@@ -18,7 +18,7 @@ from pipeline.catalog import default_catalog
 from pipeline.camera.geometry import Pose
 from pipeline.mapping.map_fusion import FusionConfig, fuse
 from pipeline.mapper import Mapper
-from pipeline.scene import Capture, Scene, SceneError, SceneObject, Source, scene_from_dict, scene_from_json
+from pipeline.scene import Capture, Scene, SceneError, SceneObject, Source, scene_from_dict, scene_from_json, scene_to_dict, scene_to_json
 from planner.grid import CellState, Workspace, build_grid
 
 TRUTH = {o.id: o for o in paper_room().objects}
@@ -218,7 +218,7 @@ def test_yaw_is_fused_modulo_a_half_turn() -> None:
 def test_history_and_pins_survive_the_scene_file_and_bad_input_is_named() -> None:
     scene, _ = fuse(Scene(), capture(LEFT, "left"))
     scene = scene.with_objects([replace(o, pinned=True) if i == 0 else o for i, o in enumerate(scene.objects)])
-    back = scene_from_json(scene.to_json())
+    back = scene_from_json(scene_to_json(scene))
     assert back.objects[0].pinned and back.objects[0].is_pinned
     assert [len(o.history) for o in back.objects] == [len(o.history) for o in scene.objects]
     assert back.objects[1].history[0].capture == "left"
@@ -227,7 +227,7 @@ def test_history_and_pins_survive_the_scene_file_and_bad_input_is_named() -> Non
         fuse(Scene(), bad)
     with pytest.raises(ValueError, match="FusionConfig.gate"):
         FusionConfig(gate=float("nan"))
-    data = back.to_dict()
+    data = scene_to_dict(back)
     data["objects"][0]["history"][0]["sigma"][0] = -0.1
     with pytest.raises(SceneError, match=r"objects\[0\]\.history\[0\]\.sigma\[0\]: must be > 0"):
         scene_from_dict(data)

@@ -181,8 +181,9 @@ def test_missing_tflite2onnx_is_one_clear_error(tmp_path: Path, monkeypatch: pyt
     target = tmp_path / "out.onnx"
     with pytest.raises(ModelError) as err:
         ssd_convert.convert_tflite(tmp_path / "x.tflite", target)
-    assert str(err.value) == ("converting the TFLite model needs tflite2onnx: pip install 'tflite2onnx==0.4.1' "
-                              "(a dependency of morphonavi: reinstall it, e.g. pip install -e .)")
+    assert str(err.value) == ("converting the TFLite model needs tflite2onnx: pip install 'morphonavi[ssd-convert]' "
+                              "(from a source checkout: pip install -e '.[ssd-convert]'), which installs "
+                              "tflite2onnx==0.4.1; only this one-time conversion needs it")
     assert not target.exists()
 
 
@@ -352,7 +353,7 @@ def test_missing_converter_through_fetch_and_cli(fake: dict, server: FileServer,
 
     monkeypatch.setitem(sys.modules, "tflite2onnx", None)
     spec = fake_spec(fake["url"], fake["tarball"], fake["payload"], fake["onnx_sha"], convert="tflite_ssd")
-    with pytest.raises(ModelError, match=r"needs tflite2onnx: pip install 'tflite2onnx==0\.4\.1'"):
+    with pytest.raises(ModelError, match=r"needs tflite2onnx: pip install 'morphonavi\[ssd-convert\]'.*tflite2onnx==0\.4\.1"):
         fetch(spec, tmp_path / "models", progress=False, log=lambda m: None)
     assert_nothing_installed(tmp_path / "models")
     assert server.log == []  # found out before downloading anything
@@ -368,7 +369,8 @@ def test_missing_converter_through_fetch_and_cli(fake: dict, server: FileServer,
     assert cli_support.models_fetch(["oidv4_ssd"], tmp_path / "cli", progress=False, log=lines.append) == 1
     errors = [m for m in lines if m.startswith("error:")]
     assert errors == ["error: oidv4_ssd: converting the TFLite model needs tflite2onnx: pip install "
-                      "'tflite2onnx==0.4.1' (a dependency of morphonavi: reinstall it, e.g. pip install -e .)"]
+                      "'morphonavi[ssd-convert]' (from a source checkout: pip install -e '.[ssd-convert]'), which "
+                      "installs tflite2onnx==0.4.1; only this one-time conversion needs it"]
     assert_nothing_installed(tmp_path / "cli")
 
 
