@@ -19,6 +19,8 @@ Per planner, counted over every (room, run, protocol, goal):
 - ``unseen``: routes through cells no capture saw free (walking cells: the column up to the robot's
   height), and their metres;
 - ``refused: viewpoint / look around / other`` (the new planner's refusals);
+- ``look+vp``: the new planner's refusals with a viewpoint in the ``look`` protocol, followed: the
+  robot goes to the viewpoint (that leg counts), captures towards the goal, and plans again from there;
 - ``plan ms``: median click-to-plan (goal check + A*) on the grid, and for the new planner the
   grid's build time per capture; ``update ms``: known-space update per 640 x 480 capture.
 
@@ -241,7 +243,64 @@ class Tally:
     examples: list[str] = field(default_factory=list)
 
 
-def run_case(room: Room, objs: list[SceneObject], ks: KnownSpace, tallies: dict[str, Tally]) -> None:
+def _route_check(room: Room, grid: PlanningGrid, res, seen: np.ndarray, tl: "Tally") -> None:
+    tl.routes += 1
+    dense, ground = densify(res.points(grid), res.cells)
+    tl.hit_body += hits(room, dense, ground, BODY)
+    tl.hit_radius += hits(room, dense, ground, RADIUS)
+    m = unseen_metres(res.cells, seen)
+    tl.unseen_routes += m > 0
+    tl.unseen_m += m
+
+
+@dataclass
+class Follow:
+    """The suggested look, taken: walk or fly to the viewpoint, capture towards the goal, plan again."""
+
+    renderer: SceneRenderer
+    rng: np.random.Generator
+    tally: "Tally"
+
+
+def follow_viewpoint(room: Room, objs: list[SceneObject], ks: KnownSpace, grid: PlanningGrid, route: Route,
+                     goal, vp, fw: Follow) -> None:
+    tl = fw.tally
+    tl.plans += 1
+    on_floor = vp[2] <= WS.floor + DEFAULT_MOUNT.position[2] + 1e-6
+    stand = (vp[0], vp[1], 0.0) if on_floor else vp
+    leg = route.plan(route.start, stand)
+    if not leg.ok:
+        tl.refused_other += 1
+        return
+    end = leg.goal or stand
+    robot_z = 0.0 if on_floor else end[2] - DEFAULT_MOUNT.position[2]
+    yaw = math.atan2(goal[1] - end[1], goal[0] - end[0])
+    cam = camera_pose_in_world(Pose.from_xyz_yaw(end[0], end[1], robot_z, yaw), DEFAULT_MOUNT)
+    r = fw.renderer.render(cam, DEFAULT_INTRINSICS)
+    noisy = (r.depth * (1.0 + 0.02 * fw.rng.standard_normal(r.depth.shape))).astype(np.float32)
+    ks2 = capture_update(ks, noisy, DEFAULT_INTRINSICS, cam, noise=DepthNoise(relative=0.03)).space
+    known = {o.id for o in objs}
+    new_ids = {v.id for v in visible_objects(r, 200)} - known
+    objs2 = objs + mapped_objects(room, new_ids, fw.rng, 0.0)
+    grid2 = build_grid(objs2, WS, RADIUS, known=ks2)
+    route2 = Route(grid2, end)
+    res = route2.plan(end, goal)
+    seen = ks.state() == KnownState.FREE
+    if not res.ok:
+        if res.viewpoint is not None:
+            tl.refused_viewpoint += 1
+        elif "Look around" in res.message:
+            tl.refused_look += 1
+        else:
+            tl.refused_other += 1
+        return
+    _route_check(room, grid, leg, seen, tl)  # the way to the viewpoint counts too
+    tl.routes -= 1
+    _route_check(room, grid2, res, ks2.state() == KnownState.FREE, tl)
+
+
+def run_case(room: Room, objs: list[SceneObject], ks: KnownSpace, tallies: dict[str, Tally],
+             follow: Follow | None = None) -> None:
     seen = ks.state() == KnownState.FREE
     start = (room.start[0], room.start[1], 0.0)
     t0 = time.perf_counter()
@@ -261,6 +320,8 @@ def run_case(room: Room, objs: list[SceneObject], ks: KnownSpace, tallies: dict[
             if not res.ok:
                 if res.viewpoint is not None:
                     tl.refused_viewpoint += 1
+                    if follow is not None and name == "new":
+                        follow_viewpoint(room, objs, ks, grid, route, goal, res.viewpoint, follow)
                 elif "Look around" in res.message:
                     tl.refused_look += 1
                 else:
@@ -268,14 +329,7 @@ def run_case(room: Room, objs: list[SceneObject], ks: KnownSpace, tallies: dict[
                     if len(tl.examples) < 3:
                         tl.examples.append(f"{room.name} {goal}: {res.message}")
                 continue
-            tl.routes += 1
-            pts = res.points(grid)
-            dense, ground = densify(pts, res.cells)
-            tl.hit_body += hits(room, dense, ground, BODY)
-            tl.hit_radius += hits(room, dense, ground, RADIUS)
-            m = unseen_metres(res.cells, seen)
-            tl.unseen_routes += m > 0
-            tl.unseen_m += m
+            _route_check(room, grid, res, seen, tl)
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -290,6 +344,7 @@ def main(argv: list[str] | None = None) -> int:
     rooms = [paper()] + [random_room(rng, n) for n in range(args.rooms)]
     keys = [(p, r) for p in ("one", "look") for r in ("noise", "miss10")]
     tallies = {k: {"today": Tally(), "new": Tally()} for k in keys}
+    follows = {"noise": Tally(), "miss10": Tally()}
     update_ms: list[float] = []
     t_all = time.perf_counter()
     # compile the numba kernels outside the timings
@@ -309,7 +364,8 @@ def main(argv: list[str] | None = None) -> int:
             ks = ks.with_free_body(body, RADIUS, HEIGHT)
             ids = set().union(*views.seen[:n])
             for run, miss in (("noise", 0.0), ("miss10", 0.1)):
-                run_case(room, mapped_objects(room, ids, rng, miss), ks, tallies[(proto, run)])
+                follow = Follow(renderer, rng, follows[run]) if proto == "look" else None
+                run_case(room, mapped_objects(room, ids, rng, miss), ks, tallies[(proto, run)], follow)
     total = time.perf_counter() - t_all
     print(f"{len(rooms)} rooms (the paper's + {args.rooms} random, seed {args.seed}), "
           f"{sum(len(r.goals) for r in rooms)} goals behind the line, workspace {WS.shape} at {WS.resolution} m")
@@ -322,6 +378,10 @@ def main(argv: list[str] | None = None) -> int:
             print(f"{proto:8} {run:7} {name:7} {t.plans:5d} {t.routes:6d} {t.hit_body:8d} {t.hit_radius:10d} "
                   f"{t.unseen_routes:6d} {t.unseen_m:8.1f} {t.refused_viewpoint:6d} {t.refused_look:8d} "
                   f"{t.refused_other:9d} {np.median(t.plan_ms):7.2f} {np.median(t.build_ms):8.2f}")
+    for run, t in follows.items():
+        print(f"{'look+vp':8} {run:7} {'new':7} {t.plans:5d} {t.routes:6d} {t.hit_body:8d} {t.hit_radius:10d} "
+              f"{t.unseen_routes:6d} {t.unseen_m:8.1f} {t.refused_viewpoint:6d} {t.refused_look:8d} "
+              f"{t.refused_other:9d}")
     allp = {n: [v for pair in tallies.values() for v in pair[n].plan_ms] for n in ("today", "new")}
     allb = {n: [v for pair in tallies.values() for v in pair[n].build_ms] for n in ("today", "new")}
     print(f"click-to-plan median: today {np.median(allp['today']):.2f} ms, new {np.median(allp['new']):.2f} ms "
@@ -334,9 +394,9 @@ def main(argv: list[str] | None = None) -> int:
     for (proto, run), pair in tallies.items():
         for ex in pair["new"].examples[:1]:
             print(f"example other refusal ({proto}, {run}): {ex}")
-    new_hits = sum(p["new"].hit_body for p in tallies.values())
-    new_close = sum(p["new"].hit_radius for p in tallies.values())
-    new_unseen = sum(p["new"].unseen_m for p in tallies.values())
+    new_hits = sum(p["new"].hit_body for p in tallies.values()) + sum(t.hit_body for t in follows.values())
+    new_close = sum(p["new"].hit_radius for p in tallies.values()) + sum(t.hit_radius for t in follows.values())
+    new_unseen = sum(p["new"].unseen_m for p in tallies.values()) + sum(t.unseen_m for t in follows.values())
     print(f"targets: new planner 0 colliding routes (body contact: {new_hits}, "
           f"{'met' if new_hits == 0 else 'MISSED'}; {new_close} within the 0.35 m radius of a true object), "
           f"0 unseen metres ({new_unseen:.1f}, {'met' if new_unseen == 0 else 'MISSED'}); total {total:.0f} s")
