@@ -86,6 +86,11 @@ def camera_source(args: argparse.Namespace) -> object | None:
         except (CameraSourceError, CameraError) as exc:
             raise CliError(str(exc)) from None
         args._camera_source = source
+        from pipeline.camera.horizon import horizon_check
+
+        horizon = horizon_check(source.camera.intrinsics, source.camera.mount)  # type: ignore[attr-defined]
+        if horizon:
+            logging.getLogger(__name__).warning("%s: %s", args.camera_file, horizon)
     return source
 
 
@@ -230,6 +235,9 @@ def cmd_console(args: argparse.Namespace) -> int:
             world = load_world(args.world)
         except WorldError as exc:
             raise CliError(f"--world {exc}") from None
+    from console.cli.console_folders import check_console_folders
+
+    check_console_folders(args, DEFAULT_SCENES)  # files given for folders, nested folders: before anything starts
     if args.captures is not None and not Path(args.captures).is_dir():
         raise CliError(f"--captures {args.captures}: no such folder")
     if args.models is not None and not Path(args.models).is_dir():

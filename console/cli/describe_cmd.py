@@ -24,6 +24,16 @@ class DescribeError(Exception):
     """A user-facing error of ``describe`` (exit status 2)."""
 
 
+def _robot_limits() -> dict[str, tuple[float, str]]:
+    from pipeline.option_values import POSE_XY_LIMIT_M, POSE_YAW_LIMIT_DEG, POSE_Z_LIMIT_M
+
+    return {"x": (POSE_XY_LIMIT_M, "m"), "y": (POSE_XY_LIMIT_M, "m"), "z": (POSE_Z_LIMIT_M, "m"),
+            "yaw_deg": (POSE_YAW_LIMIT_DEG, "deg")}
+
+
+_ROBOT_LIMITS = _robot_limits()
+
+
 def parse_robot(text: str) -> tuple[float, float, float, float]:
     """``"x,y[,z[,yaw_deg]]"`` -> ``(x, y, z, yaw [rad])`` (world frame); raises naming the field."""
     names = ("x", "y", "z", "yaw_deg")
@@ -38,9 +48,17 @@ def parse_robot(text: str) -> tuple[float, float, float, float]:
             raise DescribeError(f"--robot.{name}: must be a number, got {part!r}") from None
         if not math.isfinite(v):
             raise DescribeError(f"--robot.{name}: must be finite, got {part!r}")
+        limit, unit = _ROBOT_LIMITS[name]
+        if abs(v) > limit:
+            raise DescribeError(f"--robot.{name}: must be within {-limit:g}..{limit:g} {unit} (the range of "
+                                f"map --pose), got {v:g}")
         values.append(v)
     values += [0.0] * (4 - len(values))
     return (values[0], values[1], values[2], math.radians(values[3]))
+
+
+MAX_GRID_CELLS = 2_000_000
+"""Largest grid a ``--bounds`` suggestion may ask for (cells); a larger one comes with a coarser ``--resolution``."""
 
 
 def robot_from_captures(scene: Any) -> tuple[float, float, float, float] | None:
@@ -85,14 +103,21 @@ def bounds_hint(graph: dict[str, Any], scene: Any, pad: float) -> str:
     ids = ", ".join(out[:5]) + (", ..." if len(out) > 5 else "")
     objects = f"{len(out)} object{'' if len(out) == 1 else 's'} ({ids})" if out else ""
     subject = " and ".join(x for x in ("the robot" if robot_out else "", objects) if x)
+    res = float(ws.get("resolution") or 0.25)
+    cells = math.prod(max(1, round((b[a + 3] - b[a]) / res)) for a in range(3))
+    coarser = ""
+    if cells > MAX_GRID_CELLS:  # the suggestion must be one describe accepts: a coarser grid with it
+        res = math.ceil(res * (cells / MAX_GRID_CELLS) ** (1 / 3) * 100) / 100
+        coarser = f" --resolution {res:g}"
     return (f"({subject} {'lies' if n == 1 else 'lie'} outside the planning workspace ({w}): "
             f"give one that holds {'it' if n == 1 else 'them'} with --bounds xmin,ymin,zmin,xmax,ymax,zmax, "
-            f"e.g. --bounds={','.join(f'{v:g}' for v in b)})")
+            f"e.g. --bounds={','.join(f'{v:g}' for v in b)}{coarser})")
 
 
 def describe(args: argparse.Namespace) -> tuple[str, dict[str, Any]]:
     """The summary text and the graph for parsed ``describe`` arguments (raises :class:`DescribeError`)."""
-    from pipeline.scene import SceneError, load_scene
+    from pipeline.file_kind import FileKindError, load_scene_file
+    from pipeline.scene import SceneError
     from planner.grid import CostWeights, GridError, Workspace, build_grid
     from planner.object_goal import APPROACH_MAX
     from planner.route import Route
@@ -101,13 +126,11 @@ def describe(args: argparse.Namespace) -> tuple[str, dict[str, Any]]:
 
     robot = parse_robot(args.robot) if args.robot is not None else None
     try:
-        scene = load_scene(args.scene)
+        scene = load_scene_file(args.scene)
+    except FileKindError as exc:
+        raise DescribeError(str(exc)) from None
     except SceneError as exc:
         raise DescribeError(f"{args.scene}: {exc}") from None
-    except RecursionError:
-        raise DescribeError(f"{args.scene}: JSON nested too deeply") from None
-    except OSError as exc:
-        raise DescribeError(f"{args.scene}: cannot read: {exc.strerror or exc}") from None
     note = ""
     if robot is None:
         robot = robot_from_captures(scene)

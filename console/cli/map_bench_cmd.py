@@ -15,8 +15,7 @@ from typing import Any, Callable
 
 from pipeline.catalog import Catalog, CatalogError
 from pipeline.mapper import MapperConfig, load_mapping_models
-from pipeline.option_values import (OptionError, add_model_dir_option, check_model_dir, check_out_not_input,
-                                    check_pose_range)
+from pipeline.option_values import OptionError, add_model_dir_option, check_model_dir, check_pose_range
 
 __all__ = ["add_bench_parser", "add_calibrate_parser", "add_map_parser", "cmd_bench", "cmd_calibrate", "cmd_map",
            "load_mapping_models"]
@@ -31,8 +30,9 @@ MIN_IMAGE_SIDE = 8
 
 MODELS_HELP = ("model set: offline (YOLOX-Nano, MobileSAM, FastDepth, plus the Open Images SSD oidv4_ssd when "
                "fetched, merged class-aware; the default), offline-oidv4_ssd (without the SSD), offline+oidv4_ssd "
-               "(the SSD required), offline+oidv4_ssd:union (every class of both detectors), default (OWLv2, "
-               "MobileSAM, Depth Anything V2) or cloud")
+               "(the SSD required), offline+oidv4_ssd:union (every class of both detectors), hub (OWLv2, "
+               "MobileSAM, Depth Anything V2; 'default' is its old name, still accepted) or cloud. A folder of "
+               "model weights is --model-dir")
 
 
 def _config(args: argparse.Namespace) -> MapperConfig:
@@ -127,11 +127,27 @@ def _catalog(args: argparse.Namespace) -> Catalog:
 # --- map -------------------------------------------------------------------------------------------
 
 
+def _camera_file(path: Path) -> Any:
+    """``--camera``: the camera file; a file of another kind is named as what it is."""
+    from pipeline.camera.camera_file import load_camera_toml
+    from pipeline.camera.geometry import CameraError
+    from pipeline.file_kind import MAX_BYTES, describe_file, read_limited, wrong_kind
+
+    if Path(path).is_file():
+        read_limited(path, MAX_BYTES["camera_toml"], "a camera", "--camera")  # size first
+    try:
+        return load_camera_toml(path)
+    except CameraError:
+        kind = describe_file(path) if Path(path).is_file() else "unknown"
+        if kind not in ("camera_toml", "unknown", "json"):
+            raise _UserError(wrong_kind("", f"--camera {path}", kind, "camera_toml")) from None
+        raise
+
+
 def cmd_map(args: argparse.Namespace) -> int:
     """``morphonavi map IMAGE --camera CAMERA.toml [--pose x,y,z,yaw] [--prompts ...] --out scene.json``."""
     from pipeline.camera.camera_guess import assumed_camera
     from pipeline.camera.geometry import CameraConfig, Pose, parse_pose
-    from pipeline.camera.camera_file import load_camera_toml
     from pipeline.camera.image_io import read_image
     from pipeline.scene import save_scene
     from pipeline.mapper import Mapper, prompts_from_words
@@ -139,9 +155,17 @@ def cmd_map(args: argparse.Namespace) -> int:
 
     if args.camera is not None and args.fov is not None:
         raise _UserError("--fov is for photos without a camera file; the camera file's intrinsics are used")
-    out = Path(args.out)
-    check_out_not_input(out, [("photo", args.image), ("camera file", args.camera), ("catalog", args.catalog)])
-    camera = load_camera_toml(args.camera) if args.camera is not None else None
+    from console.cli.outputs import check_output
+
+    out = check_output(args.out, [("photo", args.image), ("camera file", args.camera), ("catalog", args.catalog)],
+                       example="scene.json")
+    camera = _camera_file(args.camera) if args.camera is not None else None
+    if camera is not None:
+        from pipeline.camera.horizon import horizon_check
+
+        horizon = horizon_check(camera.intrinsics, camera.mount)  # pitch_deg = 89.9 for 8.9: every object at the feet
+        if horizon:
+            print(f"warning: {args.camera}: {horizon}", file=sys.stderr)
     if args.pose is not None:
         check_pose_range(args.pose, "--pose")
     pose = parse_pose(args.pose, "--pose") if args.pose is not None else Pose()
@@ -160,10 +184,6 @@ def cmd_map(args: argparse.Namespace) -> int:
     if args.prompts is not None:
         prompts_from_words(catalog, args.prompts)  # empty list -> error before loading models
     camera.intrinsics.check_image(image.shape[1], image.shape[0])
-    if out.exists() and out.is_dir():
-        raise _UserError(f"--out {out} is a directory; give a file name such as {out / 'scene.json'}")
-    if not out.parent.is_dir():
-        raise _UserError(f"--out {out}: the folder {out.parent} does not exist")
     models = _models(args, catalog)
     if getattr(models, "note", ""):  # e.g. the set's second detector is not fetched (as the bench says)
         print(f"note: {models.note}", file=sys.stderr)
@@ -243,12 +263,11 @@ def cmd_bench(args: argparse.Namespace) -> int:
     """``morphonavi bench DATASET_DIR [--gt-boxes] [--out report.json]``."""
     from pipeline.bench.evaluate import format_report, run_bench
 
-    if args.out and Path(args.out).is_dir():
-        raise _UserError(f"--out {args.out} is a directory; give a file name such as {Path(args.out) / 'bench_report.json'}")
-    if args.out and not Path(args.out).expanduser().parent.is_dir():
-        raise _UserError(f"--out {args.out}: the folder {Path(args.out).expanduser().parent} does not exist")
+    from console.cli.outputs import check_output, write_error
+
     if args.out:
-        check_out_not_input(args.out, [("catalog", args.catalog), *_dataset_files(args.dataset)])
+        check_output(args.out, [("catalog", args.catalog), *_dataset_files(args.dataset)],
+                     example="bench_report.json")
     if args.no_models and not args.gt_boxes:
         raise _UserError("--no-models: only with --gt-boxes (the dataset's 2D boxes stand in for the detector); "
                          "without it the detector is a model")
@@ -266,7 +285,10 @@ def cmd_bench(args: argparse.Namespace) -> int:
     )
     print(format_report(report))
     if args.out:
-        path = report.save(args.out)
+        try:
+            path = report.save(Path(args.out).expanduser())
+        except OSError as exc:
+            raise write_error(exc, args.out) from None
         print(f"\nreport written to {path}")
     return 0
 
@@ -345,11 +367,13 @@ def cmd_calibrate(args: argparse.Namespace) -> int:
 
     if args.min_views < 1:
         raise _UserError(f"--min-views: must be at least 1, got {args.min_views}")
-    out = Path(args.out)
-    if out.is_dir():
-        raise _UserError(f"--out {out} is a directory; give a file name such as {out / 'camera.toml'}")
-    if not out.parent.is_dir():
-        raise _UserError(f"--out {out}: the folder {out.parent} does not exist")
+    from console.cli.outputs import InputFolder, check_output, write_error
+
+    inputs: list[Any] = [InputFolder("photo", p, PHOTO_SUFFIXES) if p.is_dir() else ("photo", p) for p in args.photos]
+    out = check_output(args.out, inputs, example="camera.toml")
+    if out.suffix.lower() in PHOTO_SUFFIXES:
+        raise _UserError(f"--out {args.out}: a camera file is TOML text; a {out.suffix} name would pass it for a "
+                         "photo: give --out a .toml name such as camera.toml")
     try:
         board = Board("charuco" if args.charuco else "chessboard", args.board[0], args.board[1], args.square,
                       args.marker if args.charuco else 0.0, args.dictionary)
@@ -369,8 +393,15 @@ def cmd_calibrate(args: argparse.Namespace) -> int:
         raise _UserError(str(exc)) from None
     print(cal.report())
     facts = {"rms_px": round(cal.rms, 4), "views": len(cal.per_view), "board": f"{board.kind} {board.cols}x{board.rows}",
-             "square_m": board.square}
-    write_camera_toml(out, cal.intrinsics, None, facts)
+             "square_m": board.square, **{f"sigma_{k}_px": round(cal.sigmas[k], 4) for k in ("fx", "fy", "cx", "cy")
+                                          if k in cal.sigmas},
+             "tilt_spread_deg": round(cal.tilt_spread_deg, 1), "border_cells": cal.border_cells}
+    for warning in cal.warnings:
+        print(f"warning: {warning}", file=sys.stderr)
+    try:
+        write_camera_toml(out, cal.intrinsics, None, facts)
+    except OSError as exc:
+        raise write_error(exc, args.out) from None
     print(f"camera file written to {out} (add its [mount] section: where the camera sits on the robot)")
     return 0
 
@@ -380,8 +411,11 @@ def add_calibrate_parser(subparsers: Any) -> argparse.ArgumentParser:
     p = subparsers.add_parser(
         "calibrate", help="camera intrinsics and distortion from chessboard or ChArUco photos (writes camera.toml)",
         description="Find the board in every photo (files or folders), calibrate with OpenCV, print the RMS and "
-                    "per-view reprojection errors and write camera.toml for the upright photo size. Refuses "
-                    "too few views and views that leave the focal length undetermined.",
+                    "per-view reprojection errors and every parameter's standard deviation, and write camera.toml "
+                    "for the upright photo size. Refuses too few views, boards that face the camera the same way in "
+                    "every photo (board normals within 15 deg of each other: the focal length is then not "
+                    "observable), boards seen only in the image centre (distortion not observable) and a focal "
+                    "length left undetermined; warns when the corners reach few of the image's border cells.",
     )
     p.add_argument("photos", nargs="+", type=Path, help="photos of the board, or folders of them (one camera, one size)")
     p.add_argument("--board", type=_board_size, default=(9, 6), metavar="COLSxROWS",

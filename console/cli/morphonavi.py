@@ -55,26 +55,23 @@ def join_negative_values(parser: argparse.ArgumentParser, argv: Sequence[str]) -
 
 
 def cmd_plan(args: argparse.Namespace) -> int:
-    from pipeline.scene import SceneError, load_scene
+    from pipeline.scene import SceneError
     from planner.grid import CostWeights, GridError, Workspace, build_grid
     from planner.mission import MissionError
     from planner.route import Route
     from console.cli.object_goal_cli import resolve_stop
     from console.cli.plan_known import plan_grid
 
-    out = Path(args.out)
-    if out.is_dir():
-        raise CliError(f"--out {out} is a directory; give a file name such as {out / 'mission.json'}")
-    if not out.parent.is_dir():
-        raise CliError(f"--out {out}: the folder {out.parent} does not exist")
+    from console.cli.outputs import check_output, write_error
+    from pipeline.file_kind import FileKindError, load_scene_file
+
+    out = check_output(args.out, [("scene", args.scene)], example="mission.json")
     try:
-        scene = load_scene(args.scene)
+        scene = load_scene_file(args.scene)
+    except FileKindError as exc:
+        raise CliError(str(exc)) from None
     except SceneError as exc:
         raise CliError(f"{args.scene}: {exc}") from None
-    except RecursionError:
-        raise CliError(f"{args.scene}: JSON nested too deeply") from None
-    except OSError as exc:
-        raise CliError(f"{args.scene}: cannot read: {exc.strerror or exc}") from None
     try:
         ws = Workspace(args.bounds[0], args.bounds[1], args.resolution)
         weights = CostWeights(args.w_ground, args.w_takeoff, args.w_flight, args.w_danger)
@@ -109,7 +106,7 @@ def cmd_plan(args: argparse.Namespace) -> int:
     try:
         mission.save(out)
     except OSError as exc:
-        raise CliError(f"--out {out}: cannot write: {exc.strerror or exc}") from None
+        raise write_error(exc, args.out) from None
     print(f"mission written to {out}")
     return 0
 

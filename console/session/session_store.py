@@ -111,13 +111,36 @@ def write_session_file(path: Path, data: dict[str, Any]) -> None:
 
 
 def read_session_file(path: Path, folder: Path) -> Any:
-    """The parsed JSON of the session file ``path`` in ``folder``; :class:`SessionError` if unreadable."""
+    """The parsed JSON of the session file ``path`` in ``folder``; :class:`SessionError` if unreadable.
+
+    Its size is checked before it is read (:data:`pipeline.file_kind.MAX_BYTES` ``["session"]``, 50 MB:
+    a session holding a 10 000-object map is about 10 MB), so a huge file is refused at once, with the number.
+    """
+    from pipeline.file_kind import MAX_BYTES, MB, kind_of_json, wrong_kind
+
+    limit = MAX_BYTES["session"]
     try:
-        return json.loads(path.read_text(encoding="utf-8"))
+        size = path.stat().st_size
+        if size > limit:
+            raise SessionError(f"{path.name} is {size / MB:.1f} MB, over the {limit / MB:g} MB limit for a session "
+                               "file: not read (a session with a 10 000-object map is about 10 MB)")
+        with open(path, "rb") as f:
+            raw = f.read(limit + 1)
+        if len(raw) > limit:
+            raise SessionError(f"{path.name} grew over the {limit / MB:g} MB limit for a session file: not read")
+        data = json.loads(raw.decode("utf-8"))
+        kind = kind_of_json(data)
+        if kind not in ("session", "json"):  # a scene or mission saved under the session's name
+            raise SessionError(wrong_kind("", path.name, kind, "session"))
+        return data
     except FileNotFoundError:
         raise SessionError(f"no saved session {path.name!r} in {folder}") from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise SessionError(f"cannot read {path.name}: {exc}") from None
+    except IsADirectoryError:
+        raise SessionError(f"{path.name} in {folder} is a folder, not a session file") from None
+    except UnicodeDecodeError:
+        raise SessionError(f"{path.name} is not a session file: not UTF-8 text") from None
+    except OSError as exc:
+        raise SessionError(f"cannot read {path.name}: {(exc.strerror or type(exc).__name__).lower()}") from None
     except json.JSONDecodeError as exc:
         raise SessionError(f"{path.name} is not valid JSON (line {exc.lineno}): {exc.msg}") from None
 
@@ -351,7 +374,10 @@ class Persistence(SessionCore):
         try:
             write_session_file(path, data)
         except (OSError, ValueError) as exc:
-            raise SessionError(f"cannot write {path.name}: {exc}") from None
+            from pipeline.file_kind import os_error_words
+
+            raise SessionError(f"cannot write {path.name}: "
+                               f"{os_error_words(exc, path) if isinstance(exc, OSError) else exc}") from None
         return path
 
     @property
@@ -376,9 +402,12 @@ class Persistence(SessionCore):
         except (OSError, TypeError, ValueError) as exc:  # keep working; tell the operators once
             if self._last_save_error is None:
                 log.error("autosave to %s failed: %s", path, exc)
+                from pipeline.file_kind import os_error_words  # in words, not "[Errno 30] Read-only file system"
+
+                why = os_error_words(exc, path) if isinstance(exc, OSError) else str(exc)
                 self._outbox.append(Notice(
                     "Changes are not being saved",
-                    f"writing {path} failed: {exc}. The console keeps working, but a restart will lose the "
+                    f"writing {path} failed: {why}. The console keeps working, but a restart will lose the "
                     "changes: make the folder writable (the next change then saves everything) or free some disk space.",
                     "error"))
             self._last_save_error = str(exc)
