@@ -50,7 +50,7 @@ WAIT_MAX = 30.0
 EVENTS_KEPT = 300
 """Recent events kept for ``recent_events``."""
 READ_OPS = ("summary", "scene_graph", "scene_graph_schema", "objects", "robot_state", "mission_state", "mission_json",
-            "scene_json", "last_photo", "recent_events", "proposals", "wait_proposal", "status")
+            "scene_json", "last_photo", "recent_events", "proposals", "wait_proposal", "status", "unseen_space")
 SAFE_OPS = ("hold", "land_here", "return_to_launch")
 PROPOSAL_OPS = ("plan_to_point", "plan_to_object", "propose_capture_and_map", "propose_look_around", "propose_mission",
                 "withdraw_proposal")
@@ -223,6 +223,12 @@ class AgentDoor:
         from planner.scene_graph_schema import SCENE_GRAPH_SCHEMA
 
         return SCENE_GRAPH_SCHEMA
+
+    def _op_unseen_space(self, args: Mapping[str, Any]) -> dict[str, Any]:
+        from console.mcp.unseen import unseen_space
+
+        x, y, _z, _yaw = read.robot_pose(self.session)
+        return unseen_space(self.session, (x, y))
 
     def _op_objects(self, args: Mapping[str, Any]) -> list[dict[str, Any]]:
         return read.objects(self.session)

@@ -99,6 +99,14 @@ def build_server(bridge: Bridge, allow_actions: bool = False, decision_timeout: 
         return _json(await call("mission_state"))
 
     @mcp.tool(annotations=read_only, structured_output=False)
+    async def get_unseen_space() -> str:
+        """What no capture has seen yet: the known space's share seen, cells free / occupied / unknown,
+        unlabelled obstacle cells (seen but no mapped object explains them), whether routes may enter
+        unknown space, and the frontier: seen-free floor points next to unseen floor, world frame [m],
+        nearest the robot first (where to look next). ``known: false`` before the first capture."""
+        return _json(await call("unseen_space"))
+
+    @mcp.tool(annotations=read_only, structured_output=False)
     async def get_last_photo() -> list[Any]:
         """The last photo the robot took (JPEG) and its detections (label, score, box in pixels of
         the full photo, the mapped object it became) with the camera and robot positions."""

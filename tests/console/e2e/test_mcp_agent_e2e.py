@@ -33,7 +33,7 @@ BROWSER_ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--no-first-run",
                 "--disable-component-update", "--disable-sync", "--use-angle=swiftshader", "--enable-unsafe-swiftshader"]
 REPO = Path(__file__).resolve().parents[3]
 TOOLS = {"get_scene_summary", "get_scene_graph", "list_objects", "get_robot_state", "get_mission_state",
-         "get_last_photo", "get_recent_events", "hold", "land_here", "return_to_launch", "plan_to_point",
+         "get_last_photo", "get_unseen_space", "get_recent_events", "hold", "land_here", "return_to_launch", "plan_to_point",
          "plan_to_object", "propose_mission", "propose_capture_and_map", "propose_look_around", "wait_for_decision"}
 DEADLINE = 120.0  # [s] generous: the machine may be loaded
 SHOT = REPO / "docs" / "agent_panel.png"

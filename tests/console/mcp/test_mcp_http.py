@@ -18,7 +18,7 @@ mcp = pytest.importorskip("mcp.client.session", reason="the mcp package is not i
 REPO = Path(__file__).resolve().parents[3]
 DEADLINE = 120.0  # [s] generous: the machine may be loaded
 READ_AND_SAFETY = {"get_scene_summary", "get_scene_graph", "list_objects", "get_robot_state", "get_mission_state",
-                   "get_last_photo", "get_recent_events", "hold", "land_here", "return_to_launch"}
+                   "get_last_photo", "get_unseen_space", "get_recent_events", "hold", "land_here", "return_to_launch"}
 
 
 def test_the_console_serves_mcp_over_http_read_tools_and_the_last_photo(tmp_path: Path) -> None:
