@@ -143,6 +143,7 @@ class CopterPhysics:
         if dt <= 0 or self.frozen or time.monotonic() < self._silent_until:
             return
         ls = self.landed_state
+        arrived = False
         if self.freeze_motion:
             self.vel = [0.0, 0.0, 0.0]
         elif ls == mav.MAV_LANDED_STATE_TAKEOFF and self.takeoff_alt is not None:
@@ -152,6 +153,7 @@ class CopterPhysics:
                 self.vel[2] = (-self.takeoff_alt - self.pos[2]) / dt
                 self.landed_state = mav.MAV_LANDED_STATE_IN_AIR
                 self.target = [self.pos[0], self.pos[1], -self.takeoff_alt]
+                arrived = True  # the take-off ends at its altitude, stopped (no climb carried on)
         elif ls == mav.MAV_LANDED_STATE_LANDING or (self.mode == "LAND" and ls == mav.MAV_LANDED_STATE_IN_AIR):
             self.landed_state = mav.MAV_LANDED_STATE_LANDING
             self._brake(dt, horizontal_only=True)  # LAND does not stop horizontal motion at once
@@ -174,6 +176,8 @@ class CopterPhysics:
         else:
             self._brake(dt)  # BRAKE, LOITER, GUIDED without a target, STABILIZE on the ground
         self.pos = [self.pos[i] + self.vel[i] * dt for i in range(3)]
+        if arrived:
+            self.vel[2] = 0.0
         if self.landed_state == mav.MAV_LANDED_STATE_ON_GROUND:
             self.pos[2], self.vel[2] = 0.0, 0.0
         self.record.max_speed = max(self.record.max_speed, math.hypot(self.vel[0], self.vel[1]))

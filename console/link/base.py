@@ -399,6 +399,19 @@ class RobotLink(abc.ABC):
         pose_age = st.pose_age if st.pose_age != float("inf") else 0.0
         return max(st.link_age, pose_age) + max(0.0, time.time() - st.time)
 
+    # --- who is in control -----------------------------------------------------------------------
+    @property
+    def vehicle_control(self) -> str:
+        """``""`` while the console may command the robot; else why not (the robot chose its own mode:
+        ``"vehicle took control: mode RTL (...)"``). Links whose robot never takes control keep ``""``."""
+        return ""
+
+    def take_control(self) -> None:
+        """The operator takes control back after the robot chose its own mode (sends nothing)."""
+
+    def release_control(self) -> None:
+        """The console no longer claims the robot (mission over): its mode changes are its own."""
+
     # --- camera ----------------------------------------------------------------------------------
     @abc.abstractmethod
     def capture(self) -> CaptureResult:

@@ -314,7 +314,7 @@ class MissionManager(SafetyMixin):
             log.exception("mission worker failed")
             self._emit("error", f"mission stopped by an internal error: {exc}", status=MissionStatus.ABORTED)
         finally:  # the mission is over: the vehicle's later mode changes are its own
-            getattr(self.link, "release_control", lambda: None)()
+            self.link.release_control()
 
     def _execute(self, mission: Mission) -> None:
         segs = mission.segments
@@ -400,16 +400,16 @@ class MissionManager(SafetyMixin):
         while not run.done:
             st = self._state()
             self._check_workspace(st)
-            if st.estimator_resets != resets and not self._link_lost():
-                if is_main:
-                    self._resume_point = original_index(mission.segments[index], part, run.next_waypoint)
-                return self._stop_paused(run, f"{what}: the robot's position estimate is not trusted "
-                                              f"({st.estimator or 'estimator reset'})")
             if st.link_epoch != epoch and not self._link_lost():
                 if is_main:
                     self._resume_point = original_index(mission.segments[index], part, run.next_waypoint)
                 return self._stop_paused(run, f"{what}: the robot reconnected or rebooted ("
                                          + "; ".join((st.health,) + st.warnings) + ")")
+            if st.estimator_resets != resets and not self._link_lost():
+                if is_main:
+                    self._resume_point = original_index(mission.segments[index], part, run.next_waypoint)
+                return self._stop_paused(run, f"{what}: the robot's position estimate is not trusted "
+                                              f"({st.estimator or 'estimator reset'})")
             taken = self._vehicle_control()
             if taken and not self._rebooted(epoch):
                 if is_main:

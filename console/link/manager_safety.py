@@ -120,7 +120,7 @@ class SafetyMixin:
 
     def _vehicle_control(self) -> str:
         """Live: ``""`` while the console may command the robot, else ``vehicle took control: ...``."""
-        return str(getattr(self.link, "vehicle_control", "") or "")
+        return str(self.link.vehicle_control or "")
 
     def take_control(self, confirm: bool = False) -> str:
         """Take control back from a vehicle that chose its own mode. Without ``confirm`` only returns

@@ -52,6 +52,7 @@ class ModeAuthority:
         self.reasons = reasons
         self.expected: str | None = None  # the mode the console put the vehicle in (None: no claim)
         self.confirmed = False  # a heartbeat has shown ``expected`` since it was commanded
+        self.before: str | None = None  # the mode heartbeats showed when ``expected`` was commanded
         self.pending: set[str] = set()  # modes being commanded right now
         self.recent: dict[str, float] = {}  # mode -> monotonic [s] the console last commanded it (ACK or not)
         self.taken: Takeover | None = None
@@ -67,7 +68,7 @@ class ModeAuthority:
         if mode == self.expected:
             self.confirmed = True
             return None
-        if not self.confirmed:
+        if not self.confirmed and mode == self.before:
             return None  # a heartbeat sent before our mode change took effect
         self.taken = Takeover(mode, time.monotonic(), previous or "")
         return self.taken
@@ -81,6 +82,7 @@ class ModeAuthority:
         self.pending.discard(mode)
         if ok:
             self.confirmed = self.current == mode
+            self.before = None if self.confirmed else self.current
             self.expected = mode
 
     def check(self, what: str) -> None:

@@ -16,9 +16,10 @@ and keeps the latest *valid* vehicle state in the vehicle's local NED frame [m, 
 - **duplicates, reordering, loss**: every packet goes through
   :class:`~console.link.mavlink_quality.LinkQuality` first (exact copies dropped, loss from ``seq``
   gaps, TIMESYNC latency, rates); a position sample older than the one held is dropped (reordered);
-- **reboot / reconnect** needs agreeing evidence: a heartbeat after a silence longer than the
-  heartbeat timeout, or ``time_boot_ms`` going back *and* (a silence that just ended, or
-  ``REBOOT_SAMPLES`` samples in a row on the new, earlier clock): a late copy alone is never a reboot.
+- **reboot / reconnect** needs agreeing evidence: ``time_boot_ms`` going back *and* (a heartbeat
+  silence longer than the heartbeat timeout that just ended, or ``REBOOT_SAMPLES`` samples in a row on
+  the new, earlier clock), or a new transport socket: a late copy alone, or a heartbeat gap alone (a
+  lossy radio), is never a reboot (after a gap the streams and the origin are asked for again).
   It increments ``epoch`` and records why; the EKF origin (GPS_GLOBAL_ORIGIN) is kept and a moved
   origin is warned about;
 - **mode authority and estimator trust**: :class:`~console.link.mavlink_authority.ModeAuthority` sees
@@ -261,9 +262,18 @@ class Telemetry:
                 elif msg.get_srcComponent() == v.component:
                     self.received += 1
                     epoch_reason = self._telemetry(kind, msg, now)
+            silence = None
+            if epoch_reason and epoch_reason.startswith("heartbeat back"):
+                # a heartbeat gap alone is no reboot (a lossy radio loses a few in a row): streams and origin
+                # are asked for again; a reboot shows in time_boot_ms (the silence counts as evidence there)
+                silence, epoch_reason = epoch_reason, None
             if epoch_reason:
                 self._epoch(epoch_reason)
             self.lock.notify_all()
+        if silence:
+            log.warning("vehicle %s", silence)
+            if self.on_epoch is not None:
+                self.on_epoch(silence)
         if epoch_reason:
             log.warning("vehicle %s", epoch_reason)
             if self.on_epoch is not None:
@@ -329,6 +339,8 @@ class Telemetry:
                 v.pos_time = now
                 if isinstance(boot, int):
                     v.pos_boot_ms = boot
+                if epoch is not None:  # this sample starts the rebooted vehicle's track (new origin)
+                    self.estimator.forget()
                 jump = self.estimator.position(v.pos_ned, boot / 1000.0 if isinstance(boot, int) else now)
                 if jump:
                     self._add_line(4, f"WARNING: link: {jump}")

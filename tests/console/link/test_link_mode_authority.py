@@ -174,3 +174,35 @@ def test_a_mode_the_vehicle_took_while_hovering_over_the_landing_spot_is_not_rep
         assert "vehicle took control: mode LOITER" in manager.progress().message, events(manager)
         _, modes = _console_commands_after(emu, took)
         assert "LAND" not in modes and emu.mode == "LOITER", (modes, emu.record.mode_sources)
+
+
+def test_mode_authority_rules() -> None:
+    """The rules without a vehicle: what counts as the console's own mode and what is a takeover."""
+    from console.link.mavlink_authority import ModeAuthority, VehicleInControl
+
+    lines: list[tuple[float, int, str]] = []
+    a = ModeAuthority(lambda: lines)
+    assert a.observe("STABILIZE") is None  # no claim yet: the vehicle's modes are its own
+    a.commanding("GUIDED")
+    a.commanded("GUIDED", True)
+    assert a.observe("STABILIZE") is None  # a heartbeat from before our change
+    assert a.observe("GUIDED") is None and a.confirmed
+    a.commanding("BRAKE")
+    a.commanded("BRAKE", True)  # accepted; heartbeats still say GUIDED for a moment
+    assert a.observe("GUIDED") is None
+    lines.append((time.monotonic(), 2, "CRITICAL: Fence Breached"))
+    assert a.observe("RTL") is not None  # neither ours nor the one before: a takeover at once
+    assert a.describe() == "vehicle took control: mode RTL (Fence Breached)"
+    with pytest.raises(VehicleInControl, match="LAND not sent: vehicle took control: mode RTL"):
+        a.check("LAND")
+    a.take_control()
+    assert a.describe() == "" and a.expected is None
+    # our own command whose ACK was lost is still ours when it shows up
+    a.commanding("GUIDED")
+    a.commanded("GUIDED", True)
+    a.observe("GUIDED")
+    a.commanding("LAND")
+    a.commanded("LAND", False)
+    assert a.observe("LAND") is None and a.expected == "LAND"
+    lines.clear()
+    assert a.observe("LOITER") is not None and "no reason given" in a.describe()
