@@ -208,7 +208,12 @@ def cmd_map(args: argparse.Namespace) -> int:
         from pipeline.debug_images import write_debug_images
 
         debug_files = write_debug_images(result, image, args.debug)
-    save_scene(scene, out)
+    try:
+        save_scene(scene, out)  # atomic, with the user's file mode
+    except OSError as exc:
+        from console.cli.outputs import write_error
+
+        raise write_error(exc, args.out) from None
     t = scene.captures[0].timings
     n_obj, n_det = len(scene.objects), len(result.objects)
     print(f"{n_obj} object{'' if n_obj == 1 else 's'} from {n_det} detection{'' if n_det == 1 else 's'} "
