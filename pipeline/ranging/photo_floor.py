@@ -23,6 +23,7 @@ from dataclasses import dataclass, field
 from typing import Sequence
 
 import numpy as np
+from scipy.stats import chi2
 
 from pipeline.camera.floor_fit import (
     UNKNOWN_POSE_PRIOR, Contact, DepthPlane, FloorEstimate, FloorPrior, disagreement, fit_floor, plane_from_depth,
@@ -108,6 +109,36 @@ def _ground(base: GroundModel | None, floor: FloorEstimate, sigma_floor: float, 
                                                                  "sigma_height": base.sigma_height}))
 
 
+def floor_spread(contacts: Sequence[Contact], gravity_cam: Sequence[float], camera_height: float,
+                 intr: Intrinsics) -> float:
+    """How far [m] (1-sigma) the ground under the objects lies off the plane ``g . X = H``, judged from the
+    contacts; 0 when their sizes explain them. Each contact's log ratio ``e_i`` of its size-prior depth to
+    the plane's depth at its pixel holds its own size error (``s_i``) and the local floor offset over
+    ``H``. Only when ``sum(e_i^2 / s_i^2)`` exceeds the 99 % chi-square quantile of ``n`` degrees of freedom
+    (at least :data:`MIN_SPREAD_CONTACTS` contacts: one or two objects cannot tell a raised floor from
+    their own sizes) is the offsets' spread ``H sqrt(mean(e_i^2 - s_i^2))`` returned."""
+    if len(contacts) < MIN_SPREAD_CONTACTS:
+        return 0.0
+    g = np.asarray(gravity_cam, dtype=np.float64)
+    p = intr.undistort_pixels(np.array([c.uv for c in contacts], dtype=np.float64))
+    rays = np.stack([(p[:, 0] - intr.cx) / intr.fx, (p[:, 1] - intr.cy) / intr.fy, np.ones(len(p))], axis=1)
+    gr = rays @ g
+    ok = gr > 1e-3
+    n = int(ok.sum())
+    if n < MIN_SPREAD_CONTACTS:
+        return 0.0
+    e = np.log(np.array([c.depth for c in contacts])[ok] * gr[ok] / camera_height)
+    s = np.array([c.rel_sigma for c in contacts])[ok]
+    if float(np.sum(e**2 / s**2)) <= float(chi2.ppf(0.99, n)):
+        return 0.0
+    var = float(np.mean(e**2 - s**2))
+    return camera_height * math.sqrt(var) if var > 0 else 0.0
+
+
+MIN_SPREAD_CONTACTS = 3
+"""Contacts needed to judge the ground under the objects (:func:`floor_spread`)."""
+
+
 def decide_floor(objects: Sequence[object], intr: Intrinsics, given: GroundModel | None, pose_given: bool,
                  assumed_gravity: Sequence[float], assumed_height: float | None, depth_m: np.ndarray | None,
                  sigma_floor: float) -> FloorDecision:
@@ -135,7 +166,15 @@ def decide_floor(objects: Sequence[object], intr: Intrinsics, given: GroundModel
         dis = disagreement(given_prior, fit)
         given_pitch = math.degrees(math.atan2(g0[2], math.hypot(g0[0], g0[1])))
         if dis <= DISAGREE_SIGMAS:
-            return FloorDecision(None, [given] * n, fit, f"camera pose given; the photo agrees ({dis:.1f} sigma): {fit.note}")
+            local = floor_spread(contacts, given.gravity_cam, given.camera_height, intr)
+            if local <= given.sigma_floor:
+                return FloorDecision(None, [given] * n, fit,
+                                     f"camera pose given; the photo agrees ({dis:.1f} sigma): {fit.note}")
+            wider = GroundModel(given.gravity_cam, given.camera_height, given.sigma_pitch, given.sigma_height,
+                                local, given.sigma_px)
+            return FloorDecision(None, [wider] * n, fit, (
+                f"camera pose given; the photo agrees ({dis:.1f} sigma), but the ground under the objects is "
+                f"+-{local:.2f} m off its plane: ground-contact sigma widened ({fit.note})"), remeasure=True, contacts=idx)
         # keep the given floor, widen its uncertainty by the disagreement: nothing moves because of the check
         dp, dr = fit.angles
         dlh = math.log(fit.camera_height / given.camera_height)

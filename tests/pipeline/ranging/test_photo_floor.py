@@ -12,7 +12,7 @@ import pytest
 from pipeline.ranging.distance import DistanceError, Truncation, pooled_sigma
 from pipeline.ranging.fusion import Cue
 from pipeline.ranging.ground_contact import GroundModel, ground_contact_cue
-from pipeline.ranging.photo_floor import DISAGREE_SIGMAS, contacts_of, decide_floor
+from pipeline.ranging.photo_floor import DISAGREE_SIGMAS, contacts_of, decide_floor, floor_spread
 from pipeline.ranging.placement import geometric_estimate
 from pipeline.ranging.size_prior import size_prior_cue, too_wide
 from tests.pipeline.camera.test_floor_fit import INTR, floor_contacts, gravity
@@ -103,3 +103,24 @@ def test_a_box_too_wide_for_its_class_down_weights_the_size_prior() -> None:
         assert checked.distance == plain.distance
         assert (checked.sigma > 2 * plain.sigma) is widened
         assert ("size prior down-weighted: the box is" in checked.note) is widened
+
+
+def test_people_on_ground_higher_than_the_cameras_widen_the_contact_instead_of_moving() -> None:
+    """The street scene: people stand 0.4 m above the camera's floor plane; their contacts read them far."""
+    g = gravity(0.0)
+    given = GroundModel(tuple(g), 1.5)
+    crowd = fake_objects(g, 1.1, [(-3.0, 13.0), (-1.5, 15.5), (0.0, 17.0), (1.5, 15.0), (3.0, 20.0)])
+    d = decide_floor(crowd, INTR, given, True, g, 1.5, None, 0.05)
+    assert d.remeasure and d.gravity is None and "off its plane: ground-contact sigma widened" in d.note
+    box = crowd[1].detection.box
+    before = ground_contact_cue(box, Truncation(), given, INTR, 0.43, 0.1, 0.87)[0]
+    after = ground_contact_cue(box, Truncation(), d.grounds[1], INTR, 0.43, 0.1, 0.87)[0]
+    size = crowd[1].cue("size_prior")
+    assert after.distance == pytest.approx(before.distance)  # not moved
+    assert (before.distance - size.distance) / math.hypot(before.sigma, size.sigma) > 1.5  # it out-voted
+    assert (after.distance - size.distance) / math.hypot(after.sigma, size.sigma) < 1.0
+    # the same crowd on the camera's floor: nothing to widen
+    level = decide_floor(fake_objects(g, 1.5, [(-3.0, 13.0), (-1.5, 15.5), (0.0, 17.0), (1.5, 15.0), (3.0, 20.0)]),
+                         INTR, given, True, g, 1.5, None, 0.05)
+    assert not level.remeasure and all(x is given for x in level.grounds)
+    assert floor_spread(contacts_of(crowd)[0][:2], g, 1.5, INTR) == 0.0  # two objects cannot tell
