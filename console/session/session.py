@@ -46,6 +46,7 @@ from pipeline.scene import SceneError, check_plausible
 from console.session.capture_files import CAPTURE_DIR
 from console.session.history import History, Undo
 from console.session.known_space_state import KnownSpaceSession
+from console.session import mission_rules
 from console.session.merge import merge_observations
 from console.session.operator_session import OperatorRules
 from console.views.picking import goal_on_plane, ray_plane
@@ -260,8 +261,9 @@ class Session(Persistence, Undo, OperatorRules, KnownSpaceSession):
         if len(g) != 3 or not all(math.isfinite(v) for v in g):
             return PlanResult(False, f"goal must be 3 finite numbers [m], got {goal!r}")
         with self._lock:
-            if self._run.active:
-                return PlanResult(False, "a mission is under way (running or paused): abort it, or wait until it is done, before planning")
+            why = mission_rules.blocker("plan", self._run.state)
+            if why is not None:
+                return PlanResult(False, why)
             why = self._goal_problem_locked(g)  # type: ignore[arg-type]
             if why is not None:
                 return PlanResult(False, why)
@@ -275,6 +277,7 @@ class Session(Persistence, Undo, OperatorRules, KnownSpaceSession):
     def register(self) -> str:
         """Append the candidate to the registered (green) path; returns a message."""
         with self._lock:
+            self._mission_rule_locked("register")
             if self._route.candidate is None:
                 raise SessionError("there is no candidate path to register: click a goal first")
             n = len(self._route.candidate.cells)
@@ -295,6 +298,7 @@ class Session(Persistence, Undo, OperatorRules, KnownSpaceSession):
     def undo(self) -> str:
         """Remove the last registered segment."""
         with self._lock:
+            self._mission_rule_locked("undo")
             if not self._route.undo():
                 raise SessionError("nothing to undo: no registered segment")
             self._mission = None
@@ -306,17 +310,23 @@ class Session(Persistence, Undo, OperatorRules, KnownSpaceSession):
     def clear_route(self) -> None:
         """Remove the candidate, every registered segment and the mission."""
         with self._lock:
-            if self._run.active:
-                raise SessionError("a mission is running: abort it before clearing the route")
+            self._mission_rule_locked("clear")
             self._route.clear()
             self._mission = None
             self._sync_start_locked()
             self._save_locked()
         self._emit([(ROUTE, None), (MISSION, None)])
 
+    def _mission_rule_locked(self, button: str) -> None:
+        """Refuse ``button`` with the reason when the mission state forbids it (:mod:`console.session.mission_rules`)."""
+        why = mission_rules.blocker(button, self._run.state)
+        if why is not None:
+            raise SessionError(why)
+
     def build_mission(self) -> Mission:
         """Turn the registered path into a mission (walk / take-off / fly / land segments)."""
         with self._lock:
+            self._mission_rule_locked("build")  # never while a mission is under way (paused included)
             if not self._route.registered:
                 raise SessionError("register at least one path segment before building the mission")
             mission = self._build_locked()  # may start in the air (console.session.operator_state)
@@ -326,17 +336,38 @@ class Session(Persistence, Undo, OperatorRules, KnownSpaceSession):
         return mission
 
     # --- scene -----------------------------------------------------------------------------------
-    def spawn(self, scene: Scene, origin: str = "") -> SpawnReport:
+    def spawn(self, scene: Scene, origin: str = "", replaces: Sequence[str] = ()) -> SpawnReport:
         """Add world-frame objects (re-sightings update the known object), rebuild the grid, replan.
+
+        ``replaces``: ids of objects this one replaces (a scene file rewritten: the objects its previous
+        version added), dropped first unless the operator has pinned them since. The merge runs on a
+        snapshot outside the lock (it grows with the objects: seconds for thousands) and is swapped in
+        when the map has not changed meanwhile, else merged again (under the lock the third time).
 
         Raises :class:`SessionError` naming the field of an implausible object; nothing changes then.
         """
         what = f" from {origin}" if origin else ""
         self.check_plausible(scene, f"refused{what}")
         key = origin.replace(" ", ":", 1) if origin.startswith("capture ") else ""  # one undo step with set_capture
-        with self._lock:
-            merged, added, updated = merge_observations(self._scene, scene)
-            notes = self._set_scene_locked(merged, f"spawn{what}", key)
+        drop = set(replaces)
+
+        def base_of(current: Scene) -> Scene:
+            if not drop:
+                return current
+            return current.with_objects([o for o in current.objects if o.id not in drop or o.is_pinned])
+
+        for attempt in range(3):
+            with self._lock:
+                snapshot = self._scene
+            if attempt < 2:
+                merged, added, updated = merge_observations(base_of(snapshot), scene)  # not under the lock
+            with self._lock:
+                if attempt == 2:
+                    merged, added, updated = merge_observations(base_of(self._scene), scene)
+                elif self._scene is not snapshot:
+                    continue  # the map changed while merging: merge again
+                notes = self._set_scene_locked(merged, f"spawn{what}", key)
+                break
         log.info("spawned %d new and %d updated objects%s", len(added), len(updated), what)
         self._emit([(SCENE, None), (GRID, None), (ROUTE, None), (MISSION, None)])
         return SpawnReport(tuple(added), tuple(updated), tuple(notes))
