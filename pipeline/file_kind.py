@@ -106,9 +106,8 @@ def kind_of_json(data: Any) -> str:
         return "dataset_camera"
     if {"dataset", "summary", "samples"} <= data.keys():
         return "bench_report"
-    if "version" in data and (data.keys() <= {"version", "units", "objects", "captures"}):
-        return "scene"
-    if "objects" in data and "version" in data:
+    if "version" in data and (data.keys() <= {"version", "units", "objects", "captures"}
+                              or data.keys() & {"objects", "captures", "known_space"}):
         return "scene"
     return "json"
 
