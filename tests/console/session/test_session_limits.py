@@ -40,3 +40,25 @@ def test_another_kind_under_the_session_name_is_named(tmp_path: Path, data: dict
     (tmp_path / "session.json").write_text(json.dumps(data))
     with pytest.raises(SessionError, match=said):
         read_session_file(tmp_path / "session.json", tmp_path)
+
+
+def test_the_autosave_notice_says_the_failure_in_words(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    import errno
+
+    from console.session import session_store
+    from console.session.session import Session
+    from console.session.topics import NOTICE
+    from pipeline.scene import Scene, SceneObject, Source
+
+    s = Session(tmp_path / "s", start=(2.5, 0.7, 0.0))
+    told: list = []
+    s.subscribe(lambda topic, payload: told.append(payload) if topic == NOTICE else None)
+
+    def refuse(path: Path, data: dict) -> None:
+        raise OSError(errno.EROFS, "Read-only file system", str(path))
+
+    monkeypatch.setattr(session_store, "write_session_file", refuse)
+    s.spawn(Scene(objects=(SceneObject("box-1", "cardboard_box", (1.0, 5.0, 0.2), (0.4, 0.4, 0.4),
+                                       source=Source(method="ground_truth")),)))
+    [notice] = [n for n in told if n.title == "Changes are not being saved"]
+    assert f"{s.folder} is on a read-only file system" in notice.body and "Errno" not in notice.body
