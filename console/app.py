@@ -34,7 +34,7 @@ from console.views.mission_view import MissionRunner, MissionView
 from console.views.objects_view import ObjectsView
 from console.views.paths_view import PathsView
 from console.views.scene_summary_view import SceneSummaryView
-from console.views.client_notice import page_style, tell
+from console.views.client_notice import install_tab_rules, page_style, tell
 from console.views.robot_view import RobotView, is_alert
 from console.session.scene_watch import FrameError, NotReady, SceneWatcher, objects_to_world
 from console.wording import plural
@@ -172,7 +172,9 @@ class ConsoleApp:
             self._closers.append(self.recorder.close)
         perceiver = self._perceiver_override or self._choose_perceiver()
         self.preload = ModelPreload(session, perceiver)  # started once the page is up: progress in the page
-        self.mapping = MappingJob(session, self._take_photo, perceiver, self.preload)
+        from console.session.photo_pose import photo_pairing  # a live camera's frame at the pose of its time
+
+        self.mapping = MappingJob(session, self._take_photo, perceiver, self.preload, photo_pairing(self.link))
         self.runner = self._make_runner()
 
         self.server = server = viser.ViserServer(host=cfg.host, port=cfg.port, label="MorphoNavi", verbose=False)
@@ -327,6 +329,7 @@ class ConsoleApp:
 
         paths_holder: dict[str, PathsView] = {}
         gui.add_html(page_style(RIGHT_PANEL_PX))  # notifications bottom right; the "disconnected" banner
+        install_tab_rules(server)  # a tab in the background reconnects too; notices forgotten with their tab
         from console.session.vehicle_commands import VehicleCommands
 
         self.commands = VehicleCommands(session, self.link, self.runner)  # also the agent's Hold / Land here / Return
@@ -446,7 +449,7 @@ class ConsoleApp:
             return
         color = {"error": "red", "warning": "yellow", "success": "green"}.get(notice.level, "blue")
         for client in self.server.get_clients().values():
-            tell(client, notice.title, notice.body, color)  # errors stay until closed, the rest close by themselves
+            tell(client, notice.title, notice.body, color)  # closes by itself; newer news on its subject replaces it
 
     def _show_job(self, job: JobStatus) -> None:
         assert self.mapping is not None

@@ -96,12 +96,16 @@ class MappingJob:
         perceiver: The perception backend.
         preload: The background loading of the perceiver's models (:mod:`console.session.model_preload`);
             a run waits for it after taking the photo, saying so in its progress.
+        pair: Re-places a shot at the robot's pose at its frame's time (a live camera:
+            :func:`console.session.photo_pose.photo_pairing`); raises when no pose is near it.
     """
 
     def __init__(self, session: Session, take_photo: TakePhoto, perceiver: Perceiver,
-                 preload: ModelPreload | None = None) -> None:
+                 preload: ModelPreload | None = None,
+                 pair: Callable[[CaptureResult], CaptureResult] | None = None) -> None:
         self._session = session
         self._take_photo = take_photo
+        self._pair = pair
         self.perceiver = perceiver
         self.preload = preload
         # re-entrant: start() reports 'starting' under it and the session's listeners read ``held`` then
@@ -191,7 +195,16 @@ class MappingJob:
             except MappingError:
                 raise
             except Exception as exc:  # the link's errors, whatever their type
+                from console.link.camera_source import CameraSourceError
+
+                if isinstance(exc, CameraSourceError):  # a frozen or lost live camera: its own words
+                    raise MappingError(f"the camera gave no usable photo: {exc}") from exc
                 raise MappingError(f"the robot did not deliver a photo: {exc}") from exc
+            if self._pair is not None:  # a live camera's frame at the robot's pose of that moment
+                try:
+                    shot = self._pair(shot)
+                except Exception as exc:
+                    raise MappingError(f"the photo cannot be placed: {exc}") from exc
             t_capture = time.perf_counter() - t0
             if self.preload is not None:
                 self.preload.wait_ready(lambda f, text: self._report(0.15, f"{WAITING_TEXT}: {text} ({f:.0%})"))

@@ -27,6 +27,7 @@ import trimesh
 import viser
 
 from console.views.client_notice import tell
+from console.views.robot_messages import MessageShelf
 from console.session.operator_state import battery_text
 from console.session.session import ROBOT, RUN, RobotSnapshot, Session, SessionError
 from console.session.vehicle_commands import LABELS, VehicleCommands
@@ -139,8 +140,10 @@ def trust_text(r: RobotSnapshot) -> str:
     return out
 
 
-def status_text(r: RobotSnapshot | None, link_name: str) -> str:
-    """One status line for the panel (HTML)."""
+def status_text(r: RobotSnapshot | None, link_name: str,
+                messages: tuple[tuple[int, str], ...] | None = None) -> str:
+    """One status line for the panel (HTML); ``messages`` are the robot's messages still news
+    (:class:`console.views.robot_messages.MessageShelf`), by default its last few."""
     if r is None:
         return f"<small>robot <b>{html.escape(link_name)}</b>: waiting for the first state…</small>"
     status = r.position_status
@@ -160,7 +163,7 @@ def status_text(r: RobotSnapshot | None, link_name: str) -> str:
     detail = f"<br>{html.escape(shown_detail)}" if shown_detail else ""
     quality = f" · {html.escape(r.link_quality)}" if r.link_quality else ""
     said = "".join(f"<br><span style='color:{_message_color(t)}'>{html.escape(t)}</span>"
-                   for _, t in r.messages[-MESSAGES_SHOWN:])
+                   for _, t in (r.messages if messages is None else messages)[-MESSAGES_SHOWN:])
     return (f"<small>robot <b>{html.escape(link_name)}</b> · {health}{quality} · {html.escape(mode_text(r.mode))} · {armed} · "
             f"{battery}{stale}<br>{position_text(r)}{detail}{trust_text(r)}{said}</small>")
 
@@ -181,6 +184,8 @@ class RobotView:
         self._server = server
         self._session = session
         self._link_name = link_name
+        self._shelf = MessageShelf()  # the robot's messages while they are news (not old errors)
+        self._run_state = "idle"
         self._lock = threading.Lock()
         self._last = 0.0
         self._status = server.gui.add_markdown(status_text(None, link_name))
@@ -212,6 +217,13 @@ class RobotView:
             self.show(payload)
         if topic in (ROBOT, RUN):
             self._show_commands()
+        if topic == RUN and payload is not None:
+            before, self._run_state = self._run_state, getattr(payload, "state", "")
+            if self._run_state == "done" and before != "done":
+                self._shelf.clear()  # a later success: older robot errors are old news
+                robot = self._session.robot
+                if robot is not None:
+                    self.show(robot, force=True)
 
     def _on_command(self, event: Any, name: str) -> None:
         assert self._commands is not None
@@ -263,7 +275,7 @@ class RobotView:
                 self._frame.visible = True
             self._label.text = (f"robot · {mode_text(r.mode)}" + ("" if r.healthy else " · LINK LOST")
                                 + (" · POSITION STALE" if status == "stale" else ""))
-            self._status.content = status_text(r, self._link_name)
+            self._status.content = status_text(r, self._link_name, self._shelf.current(r.messages))
 
     @property
     def twin_shown(self) -> str:
