@@ -119,8 +119,8 @@ def test_unknown_space_is_closed_until_the_operator_allows_it_and_the_unseen_par
     text = session.set_plan_unknown(True)
     assert text.startswith("planning into unknown space") and session.plan_unknown == "allow"
     assert json.loads((session.folder / "session.json").read_text())["plan_unknown"] == "allow"
-    res = session.add_goal(behind)
-    assert res.ok, res.message
+    res = session.add_goal((4.5, 1.0, 0.0))  # beside the robot, past the edge of the photo
+    assert res.ok and res.unseen_m > 0, res.message
     segs, metres = session.unseen_route()
     assert len(segs) > 0 and metres == pytest.approx(res.unseen_m, abs=1e-6) and "unseen space" in res.message
     assert "planning into unknown space" in session.known_summary().text()
