@@ -134,6 +134,7 @@ class ConsoleApp:
         self.preload: ModelPreload | None = None
         self.runner: MissionRunner | None = None
         self.watcher: SceneWatcher | None = None
+        self._file_objects: dict[str, tuple[str, ...]] = {}  # watched file name -> the object ids it added
         self.views: dict[str, Any] = {}
         self._closers: list[Callable[[], None]] = []
         self._stopped = threading.Event()
@@ -473,10 +474,14 @@ class ConsoleApp:
             if robot is None:
                 raise NotReady from None  # robot-frame objects: wait for the robot's first pose
             raise
-        report = self.session.spawn(world, origin=f"file {name}")
+        # a file read again (rewritten, or replaced by a rename) replaces what its previous version added
+        previous = self._file_objects.get(name, ())
+        report = self.session.spawn(world, origin=f"file {name}", replaces=previous)
+        self._file_objects[name] = tuple(report.added) + tuple(i for i in report.updated if i in previous)
         self.session.warn_objects_over_robot(f"scene file {name}")  # names an object placed over the robot
+        again = f" (read again: replaces the {plural(len(previous), 'object')} it added before)" if previous else ""
         self.session.notify("Scene file spawned", f"{name}: {len(report.added)} new, {plural(len(report.updated), 'updated object')}"
-                            + ("; " + "; ".join(report.notes) if report.notes else ""), "success")
+                            + again + ("; " + "; ".join(report.notes) if report.notes else ""), "success")
 
     def _bad_file(self, name: str, message: str) -> None:
         assert self.session is not None
