@@ -206,3 +206,25 @@ def test_mode_authority_rules() -> None:
     assert a.observe("LAND") is None and a.expected == "LAND"
     lines.clear()
     assert a.observe("LOITER") is not None and "no reason given" in a.describe()
+
+
+def test_a_link_loss_while_the_vehicle_flies_its_own_mode_sends_nothing() -> None:
+    """The vehicle took control (LAND by a battery failsafe), then the link is lost: the console's
+    failsafe neither holds nor lands it (no BRAKE over the vehicle's own LAND)."""
+    with vehicle(config(fly_speed=1.0), descent_rate=0.2) as (link, emu):
+        _airborne(link)
+        manager = mission_manager(link, failsafe_after=0.8, failsafe_hold=0.5)
+        manager.start(_flight())
+        assert eventually(lambda: emu.pos[0] > 1.0)
+        emu.battery_failsafe("LAND")
+        took = time.monotonic()
+        assert manager.wait(30.0) is MissionStatus.PAUSED, events(manager)
+        emu.heartbeat_enabled = emu.telemetry_enabled = False  # the link goes silent (the vehicle still lands)
+        assert eventually(lambda: any(m.startswith("FAILSAFE") for m in events(manager)), 30.0), events(manager)
+        said = next(m for m in events(manager) if m.startswith("FAILSAFE"))
+        assert "vehicle took control: mode LAND (Battery 1 is low" in said and "the console sends nothing" in said, said
+        time.sleep(1.5)
+        emu.heartbeat_enabled = emu.telemetry_enabled = True
+        time.sleep(1.0)
+        _, modes = _console_commands_after(emu, took)
+        assert modes == [] and emu.mode == "LAND", (modes, emu.mode)
