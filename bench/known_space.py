@@ -279,6 +279,8 @@ def follow_viewpoint(room: Room, objs: list[SceneObject], ks: KnownSpace, grid: 
     r = fw.renderer.render(cam, DEFAULT_INTRINSICS)
     noisy = (r.depth * (1.0 + 0.02 * fw.rng.standard_normal(r.depth.shape))).astype(np.float32)
     ks2 = capture_update(ks, noisy, DEFAULT_INTRINSICS, cam, noise=DepthNoise(relative=0.03)).space
+    if on_floor:  # the robot stood there: its body is free (as the console marks it at each capture)
+        ks2 = ks2.with_free_body((end[0], end[1], 0.0), RADIUS, HEIGHT)
     known = {o.id for o in objs}
     new_ids = {v.id for v in visible_objects(r, 200)} - known
     objs2 = objs + mapped_objects(room, new_ids, fw.rng, 0.0)

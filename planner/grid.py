@@ -160,6 +160,7 @@ class Closed(IntEnum):
     UNLABELLED = 3  # a depth surface no mapped object explains
     UNKNOWN = 4  # not seen yet (unknown space closed)
     BENEATH = 5  # under a floating object, not seen free
+    SURFACE = 6  # a depth surface a mapped object explains, outside its mapped box (the box may be off)
 
 
 UNKNOWN_POLICIES = ("closed", "allow")
@@ -384,8 +385,9 @@ def build_grid(
         floating: ``close`` the column under a floating object unless seen free (with known space),
             or ``keep`` it (a simulator's true world, where floating things really float).
 
-    Rules (world frame, cell centres): obstacles are the objects' boxes, unlabelled cells (known
-    occupied, no object explains them), unknown cells (when closed) and the columns beneath
+    Rules (world frame, cell centres): obstacles are the objects' boxes, every occupied known-space
+    cell (unlabelled ones: no object explains them; and the seen surfaces of mapped objects outside
+    their boxes, which may be mapped off), unknown cells (when closed) and the columns beneath
     floating objects. The **ground layer** (``k = 0``, walking) is closed where an obstacle lies
     within ``robot.radius`` horizontally of the cell's centre anywhere up to ``robot.height`` (the
     walking cylinder); **air layers** where an obstacle lies within ``robot.flying_radius`` in 3D.
@@ -416,11 +418,13 @@ def build_grid(
         except ValueError as exc:
             raise GridError(f"known space: {exc}") from None
         unl = unl & ~obj_occ
+        surface = (kstate == 2) & ~obj_occ & ~unl  # seen surfaces of mapped objects, outside their boxes
         unknown_cells = (kstate == 0) & ~obj_occ
         seen_free: np.ndarray | None = kstate == 1
         rule = unknown
     else:
         unl = np.zeros(ws.shape, dtype=bool)
+        surface = np.zeros(ws.shape, dtype=bool)
         unknown_cells = np.zeros(ws.shape, dtype=bool)
         seen_free = None
         rule = "fully_known"
@@ -430,7 +434,7 @@ def build_grid(
     else:
         beneath, floating_ids = np.zeros(ws.shape, dtype=bool), []
     closed_unknown = unknown_cells if rule == "closed" else np.zeros(ws.shape, dtype=bool)
-    cell_obst = unl | beneath | closed_unknown
+    cell_obst = unl | surface | beneath | closed_unknown
     reason = np.zeros(ws.shape, dtype=np.uint8)
     danger = np.zeros(ws.shape, dtype=bool)
     axes = ws.axes()
@@ -449,7 +453,8 @@ def build_grid(
     reason[:, :, 0] = np.where(ground, Closed.CLEARANCE, Closed.OPEN)
     danger[:, :, 0] = (d2 <= reach_w + 1e-9) | dilate(col, reach_w, res)
     # what the cell (for the ground layer: its walking column) itself holds wins over clearance
-    for mask, why in ((closed_unknown, Closed.UNKNOWN), (beneath, Closed.BENEATH), (unl, Closed.UNLABELLED),
+    for mask, why in ((closed_unknown, Closed.UNKNOWN), (beneath, Closed.BENEATH), (surface, Closed.SURFACE),
+                      (unl, Closed.UNLABELLED),
                       (obj_occ, Closed.OBJECT)):
         if why is not Closed.OBJECT:  # an object above the floor cell only crowds the walking body: clearance
             reason[:, :, 0][mask[:, :, :kh].any(axis=2)] = why

@@ -114,14 +114,23 @@ class Route:
         self.candidate_goal: Vec3 | None = None
 
     def _own_cost(self) -> np.ndarray:
-        """The grid's cost with the robot's own cells at :attr:`start` opened (free by definition);
-        sets :attr:`start_warning` when they overlap an object."""
+        """The grid's cost with the robot's own cells at :attr:`start` opened (free by definition: the
+        cells within its radius that are closed as unseen or under a floating object, and when the
+        robot's own cell is closed, every one of them); sets :attr:`start_warning` when they overlap
+        an object."""
         cost = self._grid.cost(self._weights)
         self.start_warning = ""
         p = self.start
         if not all(math.isfinite(v) for v in p) or self._grid.workspace.cell_of(p) is None:
             return cost
+        cell = self._grid.workspace.cell_of(p)
         own = self._grid.own_cells(p) & ~np.isfinite(cost)
+        if self._grid.reason is not None and math.isfinite(cost[cell]):
+            # the body's volume is free whatever the map says (unseen, under a floating object), but a
+            # cell closed for clearance stays closed: opening it would let the robot move closer to
+            # an obstacle; only a robot already stranded (its own cell closed) may use those to leave
+            body_free = np.isin(self._grid.reason, [int(Closed.UNKNOWN), int(Closed.BENEATH)])
+            own &= body_free
         if own.any():
             base = self._grid.cost(CostWeights(self._weights.ground, self._weights.takeoff, self._weights.flight,
                                                self._weights.danger, False))
@@ -247,6 +256,10 @@ class Route:
         if why is Closed.UNLABELLED:
             return (f"{here} is inside an unlabelled obstacle (the depth map saw a surface there that no mapped "
                     "object explains)"), None
+        if why is Closed.SURFACE:
+            obj, _ = g.nearest_object(g.workspace.centers(np.array([c]))[0])
+            near = f" (near {obj.label} '{obj.id}')" if obj is not None else ""
+            return f"{here} is on a surface the depth map saw{near}", None
         if why is Closed.BENEATH:
             return (f"{here} is under an object mapped floating ({', '.join(g.floating) or 'unnamed'}): the floor "
                     "beneath it is closed until a capture sees it free"), None

@@ -44,7 +44,7 @@ FLIGHT_WEIGHT = 3.0
 MAX_CANDIDATES = 600
 """Best-scored candidates whose line of sight is checked."""
 
-_BLOCKING = (Closed.OBJECT, Closed.UNLABELLED, Closed.BENEATH)
+_BLOCKING = (Closed.OBJECT, Closed.UNLABELLED, Closed.SURFACE, Closed.BENEATH)
 _FACES = ndimage.generate_binary_structure(3, 1)
 
 

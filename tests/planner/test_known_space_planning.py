@@ -162,6 +162,11 @@ def test_unlabelled_obstacles_are_avoided_like_objects_and_counted() -> None:
     # explained by a mapped object: not unlabelled (and still avoided as that object)
     wall = SceneObject("wall", "office_cabinet", (2.5, 4.125, 0.625), (0.25, 1.25, 5.0))
     assert build_grid([wall], WS, known=ks).unlabelled == 0
+    # mapped 0.33 m off (within the tolerance and half a cell, so explained): the seen surface still closes its cells
+    off = SceneObject("wall", "office_cabinet", (2.5, 4.45, 0.625), (0.25, 1.25, 5.0))
+    g_off = build_grid([off], WS, known=ks)
+    assert g_off.unlabelled == 0 and g_off.reason_at((10, 16, 0)) is Closed.SURFACE
+    assert g_off.state_at((10, 15, 0)) is CellState.OCCUPIED  # 0.125 m from the seen surface
 
 
 def test_the_robot_under_an_object_can_plan_and_is_warned() -> None:
