@@ -228,7 +228,7 @@ def route_edits(has_candidate: bool, registered: int, read_only: bool = False,
 
 
 # --- vehicle commands ----------------------------------------------------------------------------
-COMMANDS = ("hold", "land", "return", "disarm")
+COMMANDS = ("hold", "land", "return", "disarm", "control")
 
 
 @dataclass(frozen=True)
@@ -242,13 +242,25 @@ class CommandState:
 
 def vehicle_commands(robot: RobotSnapshot | None, run: RunStatus, ws: Workspace,
                      launch: Vec3 | None) -> dict[str, CommandState]:
-    """Hold / Land here / Return / Disarm for the robot's state.
+    """Hold / Land here / Return / Disarm / Take control for the robot's state.
+
+    While the vehicle flies a mode it chose itself (``robot.vehicle_control``: a failsafe's RTL or
+    LAND, another ground station, RC), only *Take control* is on: the others would command it.
 
     Shown whenever the robot is armed or off the ground and no mission is running (a running
     mission has Pause / Abort); Land here and Return need no mission under way; Disarm only on
     the ground.
     """
     off = {name: CommandState() for name in COMMANDS}
+    taken = getattr(robot, "vehicle_control", "") if robot is not None else ""
+    if taken:  # the vehicle flies a mode it chose (RTL, LAND, ...): the console commands nothing until the
+        # operator takes control back, knowingly (a confirmation that says what the vehicle does)
+        lost = "" if robot.healthy else link_lost(robot)
+        why = f"the vehicle flies its own mode ({taken}): Take control first"
+        out = {name: CommandState(True, False, why) for name in ("hold", "land", "return")}
+        out["disarm"] = CommandState()
+        out["control"] = CommandState(True, not lost, lost)
+        return out
     if robot is None or run.state == "running":
         return off
     up = airborne(robot, ws)
@@ -285,6 +297,7 @@ def vehicle_commands(robot: RobotSnapshot | None, run: RunStatus, ws: Workspace,
     else:
         why = lost or busy
         out["disarm"] = CommandState(True, not why, why)
+    out["control"] = CommandState()  # the console has control
     return out
 
 

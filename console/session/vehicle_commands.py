@@ -1,4 +1,4 @@
-"""Vehicle commands outside missions: Hold, Land here, Return, Disarm.
+"""Vehicle commands outside missions: Hold, Land here, Return, Disarm, Take control.
 
 Whether a command applies (and why not) is decided by the session's operator rules
 (:func:`console.session.operator_state.vehicle_commands`); this class carries a command out over the robot
@@ -22,7 +22,7 @@ from console.session.session import Session, SessionError
 
 log = logging.getLogger(__name__)
 
-LABELS = {"hold": "Hold", "land": "Land here", "return": "Return", "disarm": "Disarm"}
+LABELS = {"hold": "Hold", "land": "Land here", "return": "Return", "disarm": "Disarm", "control": "Take control"}
 """The button label of each command."""
 
 
@@ -75,6 +75,8 @@ class VehicleCommands:
         if name not in LABELS:
             raise SessionError(f"unknown vehicle command {name!r}; expected one of {', '.join(LABELS)}")
         self._check(name)
+        if name == "control":
+            return self.take_control(confirm=True)
         try:
             if name == "hold":
                 self._need(self._link, "robot link").hold()
@@ -90,6 +92,22 @@ class VehicleCommands:
             raise SessionError(f"{LABELS[name]} refused: {exc}") from None
         spot = mission.segments[-1].end
         return f"{LABELS[name].lower()}: landing at ({spot[0]:.2f}, {spot[1]:.2f})"
+
+    def take_control(self, confirm: bool = False) -> str:
+        """Take control back from a vehicle flying a mode it chose (RTL, LAND, another ground station).
+
+        Without ``confirm``: only the question for the operator, saying what the vehicle does now.
+        With it: the console may command the vehicle again (Resume then switches it to GUIDED).
+        Raises :class:`SessionError` when the vehicle has not taken control or the link cannot say.
+        """
+        self._check("control")
+        take = getattr(self._runner, "take_control", None)
+        if take is None:
+            raise SessionError("this robot link has no vehicle modes to take control from")
+        try:
+            return str(take(confirm))
+        except Exception as exc:  # the manager could not read the vehicle
+            raise SessionError(f"Take control refused: {exc}") from None
 
     @staticmethod
     def _need(thing: Any, what: str) -> Any:

@@ -263,6 +263,10 @@ class ManagerRunner:
     def abort(self) -> None:
         self.manager.abort()
 
+    def take_control(self, confirm: bool = False) -> str:
+        """The manager's :meth:`~console.link.manager.MissionManager.take_control` (the question, or done)."""
+        return self.manager.take_control(confirm)
+
     def close(self) -> None:
         self.unsubscribe()
         self.manager.close()

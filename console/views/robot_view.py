@@ -194,8 +194,8 @@ class RobotView:
         self._shown_commands: Any = None
         if commands is not None:
             icons = {"hold": viser.Icon.PLAYER_PAUSE, "land": viser.Icon.ARROW_BAR_TO_DOWN, "return": viser.Icon.HOME,
-                     "disarm": viser.Icon.POWER}
-            colors = {"hold": "yellow", "land": "orange", "return": "blue", "disarm": "gray"}
+                     "disarm": viser.Icon.POWER, "control": viser.Icon.STEERING_WHEEL}
+            colors = {"hold": "yellow", "land": "orange", "return": "blue", "disarm": "gray", "control": "red"}
             for name, label in LABELS.items():
                 b = server.gui.add_button(label, color=colors[name], icon=icons[name], visible=False,
                                           hint=f"Vehicle command: {label}")
@@ -227,6 +227,9 @@ class RobotView:
 
     def _on_command(self, event: Any, name: str) -> None:
         assert self._commands is not None
+        if name == "control":
+            self._confirm_take_control(event)
+            return
         try:
             message = self._commands.run(name)
         except SessionError as exc:
@@ -234,6 +237,34 @@ class RobotView:
             tell(event.client, f"{LABELS[name]}: not done", str(exc), "yellow")
             return
         tell(event.client, LABELS[name], message, "blue")
+
+    def _confirm_take_control(self, event: Any) -> None:
+        """Take control asks first, in the clicking tab, saying what the vehicle does now."""
+        assert self._commands is not None
+        try:
+            question = self._commands.take_control(confirm=False)
+        except SessionError as exc:
+            tell(event.client, "Take control: not done", str(exc), "yellow")
+            return
+        client = event.client
+        with client.gui.add_modal("Take control from the vehicle?") as modal:
+            client.gui.add_markdown(html.escape(question))
+            yes = client.gui.add_button("Take control", color="red", icon=viser.Icon.STEERING_WHEEL)
+            no = client.gui.add_button("Cancel")
+
+        def decide(confirm: bool) -> None:
+            modal.close()
+            if not confirm:
+                return
+            try:
+                message = self._commands.run("control")
+            except SessionError as exc:
+                tell(client, "Take control: not done", str(exc), "yellow")
+                return
+            tell(client, "Take control", message, "blue")
+
+        yes.on_click(lambda _e: decide(True))
+        no.on_click(lambda _e: decide(False))
 
     def _show_commands(self) -> None:
         """Show the vehicle commands the session's rules allow now (only when that changes)."""

@@ -203,7 +203,7 @@ def test_vehicle_commands_follow_the_robot_state() -> None:
     assert shown(None) == nothing and shown(_ground(2.5, 0.7)) == nothing  # standing, disarmed
     assert shown(_hover(2.5, 3.0, 1.5), RunStatus("running")) == nothing  # the mission has Pause / Abort
     assert shown(_hover(2.5, 3.0, 1.5)) == {"hold": (True, True), "land": (True, True), "return": (True, True),
-                                            "disarm": (False, False)}
+                                            "disarm": (False, False), "control": (False, False)}
     paused = shown(_hover(2.5, 3.0, 1.5), RunStatus("paused"))
     assert paused["hold"] == (True, True) and paused["land"] == (True, False) and paused["return"] == (True, False)
     assert "abort it first" in rules.vehicle_commands(_hover(2.5, 3.0, 1.5), RunStatus("paused"), ws, launch)["land"].reason
@@ -367,9 +367,9 @@ def test_the_panels_show_the_vehicle_commands_replan_and_landing_actions_the_rul
         s.set_robot(_ground(2.5, 0.7))
         assert not any(b.visible for b in buttons.values())
         s.set_robot(_hover(2.5, 2.0, 1.5))
-        assert usable() == {"hold": True, "land": True, "return": True, "disarm": False}
+        assert usable() == {"hold": True, "land": True, "return": True, "disarm": False, "control": False}
         s.set_run(RunStatus("paused", 0, 0.2))
-        assert usable() == {"hold": True, "land": False, "return": False, "disarm": False}
+        assert usable() == {"hold": True, "land": False, "return": False, "disarm": False, "control": False}
         assert buttons["land"].visible and "abort it first" in robot_view._why_not.content
         s.set_run(RunStatus("running", 0, 0.3))
         assert not any(b.visible for b in buttons.values())  # the mission's Pause / Abort drive it
