@@ -119,12 +119,9 @@ class CostWeights:
                 raise GridError(f"cost weight {name} must be a positive number, got {v}")
 
 
-def box_cells(obj: SceneObject, ws: Workspace) -> np.ndarray:
-    """Boolean mask [nx, ny, nz] of the cells an object's oriented box overlaps.
-
-    A cell counts when its centre lies strictly within the box grown by half a cell, i.e. the
-    cell and the box overlap for an axis-aligned box (slightly conservative when yawed).
-    """
+def box_window(obj: SceneObject, ws: Workspace) -> tuple[tuple[slice, slice, slice], np.ndarray] | None:
+    """The cells an object's oriented box overlaps, as index slices of the grid and the mask within them
+    (``None`` when it overlaps none): :func:`box_cells` without a whole-grid array per object."""
     if obj.frame != "world":
         raise GridError(f"object {obj.id!r} is in the {obj.frame} frame; the planner needs world")
     w, h, l = obj.size
@@ -138,16 +135,29 @@ def box_cells(obj: SceneObject, ws: Workspace) -> np.ndarray:
     ix = np.nonzero(np.abs(xs - cx) < rx)[0]
     iy = np.nonzero(np.abs(ys - cy) < ry)[0]
     iz = np.nonzero(np.abs(zs - cz) < h / 2 + half)[0]
-    mask = np.zeros(ws.shape, dtype=bool)
     if ix.size == 0 or iy.size == 0 or iz.size == 0:
-        return mask
+        return None
     dx = xs[ix][:, None] - cx
     dy = ys[iy][None, :] - cy
     along = c * dx + s * dy  # length axis
     across = -s * dx + c * dy  # width axis
     foot = (np.abs(along) < l / 2 + half) & (np.abs(across) < w / 2 + half)
     sub = np.repeat(foot[:, :, None], iz.size, axis=2)
-    mask[np.ix_(ix, iy, iz)] = sub
+    # the axes are sorted, so each index set is one contiguous run
+    return (slice(int(ix[0]), int(ix[-1]) + 1), slice(int(iy[0]), int(iy[-1]) + 1),
+            slice(int(iz[0]), int(iz[-1]) + 1)), sub
+
+
+def box_cells(obj: SceneObject, ws: Workspace) -> np.ndarray:
+    """Boolean mask [nx, ny, nz] of the cells an object's oriented box overlaps.
+
+    A cell counts when its centre lies strictly within the box grown by half a cell, i.e. the
+    cell and the box overlap for an axis-aligned box (slightly conservative when yawed).
+    """
+    mask = np.zeros(ws.shape, dtype=bool)
+    found = box_window(obj, ws)
+    if found is not None:
+        mask[found[0]] = found[1]
     return mask
 
 
@@ -333,10 +343,14 @@ class PlanningGrid:
 def _object_cells(objs: Sequence[SceneObject], ws: Workspace) -> tuple[np.ndarray, np.ndarray]:
     occupied = np.zeros(ws.shape, dtype=bool)
     owner = np.full(ws.shape, -1, dtype=np.int32)
-    for n, obj in enumerate(objs):
-        cells = box_cells(obj, ws)
-        owner[cells & ~occupied] = n
-        occupied |= cells
+    for n, obj in enumerate(objs):  # each object touches only its own window (not the whole grid)
+        found = box_window(obj, ws)
+        if found is None:
+            continue
+        win, cells = found
+        occ, own = occupied[win], owner[win]  # views
+        own[cells & ~occ] = n
+        occ |= cells
     return occupied, owner
 
 
