@@ -14,7 +14,6 @@ from __future__ import annotations
 
 import html
 import logging
-import socket
 import threading
 import time
 from dataclasses import dataclass, field
@@ -25,7 +24,7 @@ import viser
 
 from planner.grid import Workspace
 
-from console.hosts import LOOPBACK_NAMES, is_loopback  # noqa: F401  (importable from here as before)
+from console.hosts import LOOPBACK_NAMES, check_listenable, is_loopback  # noqa: F401  (importable from here as before)
 from console.views.capture_view import CaptureView
 from console.views.grid_view import GridView
 from console.session.mapping_job import MappingJob, Perceiver
@@ -45,20 +44,6 @@ log = logging.getLogger(__name__)
 
 BRAND_RGB = (0, 122, 204)
 RIGHT_PANEL_PX = 370  # width of the right-docked control panel [px]
-
-
-def check_listenable(host: str) -> None:
-    """Raise ``OSError`` naming ``host`` if no socket can listen there (viser would wait forever)."""
-    try:
-        infos = socket.getaddrinfo(host, None, type=socket.SOCK_STREAM)
-    except socket.gaierror as exc:
-        raise OSError(f"cannot listen on {host!r}: unknown host ({exc})") from None
-    family, _, _, _, addr = infos[0]
-    with socket.socket(family, socket.SOCK_STREAM) as sock:
-        try:
-            sock.bind((addr[0], 0))
-        except OSError as exc:
-            raise OSError(f"cannot listen on {host!r}: {exc.strerror or exc}; is it an address of this machine?") from None
 
 
 @dataclass

@@ -1,10 +1,10 @@
-"""``morphonavi describe SCENE.json [--robot x,y,z,yaw_deg] [--json]``: the scene graph or its summary.
+"""``morphonavi describe SCENE.json [--pose x,y,z,yaw_deg] [--json]``: the scene graph or its summary.
 
 Registered by :mod:`console.cli.morphonavi`. The scene must be in the world frame; the robot pose is
 ``x,y[,z[,yaw_deg]]`` (world [m], heading in degrees from +x, counter-clockwise) and defaults to
 the pose of the scene's latest capture, if it has one. The grid options are those of ``plan``
 (reachability uses the same grid and costs). User mistakes (missing or malformed file, a bad
-``--robot`` value, a bad grid option) print ``morphonavi describe: error: ...`` naming the field
+``--pose`` value, a bad grid option) print ``morphonavi describe: error: ...`` naming the field
 and exit with status 2. When objects lie outside the planning workspace (``--bounds``, default the
 paper's 5 x 8 x 3 m room) the summary ends with a note saying so and suggesting ``--bounds`` that
 hold them all.
@@ -39,18 +39,18 @@ def parse_robot(text: str) -> tuple[float, float, float, float]:
     names = ("x", "y", "z", "yaw_deg")
     parts = [p.strip() for p in str(text).split(",")]
     if not 2 <= len(parts) <= 4 or not all(parts):
-        raise DescribeError(f"--robot: expected 'x,y[,z[,yaw_deg]]' (metres, degrees), got {text!r}")
+        raise DescribeError(f"--pose: expected 'x,y[,z[,yaw_deg]]' (metres, degrees), got {text!r}")
     values = []
     for name, part in zip(names, parts):
         try:
             v = float(part)
         except ValueError:
-            raise DescribeError(f"--robot.{name}: must be a number, got {part!r}") from None
+            raise DescribeError(f"--pose.{name}: must be a number, got {part!r}") from None
         if not math.isfinite(v):
-            raise DescribeError(f"--robot.{name}: must be finite, got {part!r}")
+            raise DescribeError(f"--pose.{name}: must be finite, got {part!r}")
         limit, unit = _ROBOT_LIMITS[name]
         if abs(v) > limit:
-            raise DescribeError(f"--robot.{name}: must be within {-limit:g}..{limit:g} {unit} (the range of "
+            raise DescribeError(f"--pose.{name}: must be within {-limit:g}..{limit:g} {unit} (the range of "
                                 f"map --pose), got {v:g}")
         values.append(v)
     values += [0.0] * (4 - len(values))
@@ -184,8 +184,9 @@ def add_describe_parser(subparsers: Any) -> argparse.ArgumentParser:
         description="Print a short summary of a world-frame scene for people and language models, or its scene "
                     "graph (--json, schema version 2: --schema prints it).")
     p.add_argument("scene", type=Path, nargs="?", default=None, help="scene JSON (world frame)")
-    p.add_argument("--robot", default=None, metavar="X,Y[,Z[,YAW_DEG]]",
-                   help="robot pose in the world frame [m, degrees from +x]; default: the latest capture's")
+    p.add_argument("--pose", "--robot", dest="robot", default=None, metavar="X,Y[,Z[,YAW_DEG]]",
+                   help="robot pose in the world frame [m, degrees from +x], as map --pose; default: the latest "
+                        "capture's (--robot is the old name: console --robot names the robot link)")
     p.add_argument("--json", action="store_true", help="print the scene graph as JSON instead of the summary")
     p.add_argument("--schema", action="store_true", help="print the JSON schema of the scene graph and exit")
     _add_planner_args(p)

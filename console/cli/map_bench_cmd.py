@@ -128,7 +128,7 @@ def _catalog(args: argparse.Namespace) -> Catalog:
 
 
 def _camera_file(path: Path) -> Any:
-    """``--camera``: the camera file; a file of another kind is named as what it is."""
+    """``--camera-file``: the camera file; a file of another kind is named as what it is."""
     from pipeline.camera.camera_file import load_camera_toml
     from pipeline.camera.geometry import CameraError
     from pipeline.file_kind import MAX_BYTES, describe_file, read_limited, wrong_kind
@@ -145,7 +145,7 @@ def _camera_file(path: Path) -> Any:
 
 
 def cmd_map(args: argparse.Namespace) -> int:
-    """``morphonavi map IMAGE --camera CAMERA.toml [--pose x,y,z,yaw] [--prompts ...] --out scene.json``."""
+    """``morphonavi map IMAGE --camera-file CAMERA.toml [--pose x,y,z,yaw] [--prompts ...] --out scene.json``."""
     from pipeline.camera.camera_guess import assumed_camera
     from pipeline.camera.geometry import CameraConfig, Pose, parse_pose
     from pipeline.camera.image_io import read_image
@@ -244,12 +244,14 @@ def add_map_parser(subparsers: Any) -> argparse.ArgumentParser:
         description="Detect, segment and place the objects of one photo; write the scene JSON (world frame).",
     )
     p.add_argument("image", help="photo (JPEG, PNG, ...)")
-    p.add_argument("--camera", "--camera-file", type=Path, default=None, metavar="CAMERA.toml",
-                   help="camera.toml: intrinsics [px] for the upright image and mount (morphonavi calibrate writes "
-                        "one). Without it the intrinsics are ASSUMED (--fov, else the photo's EXIF 35 mm focal "
+    p.add_argument("--camera-file", "--camera", dest="camera", type=Path, default=None, metavar="CAMERA.toml",
+                   help="camera file: camera.toml (intrinsics [px] for the upright image and mount; morphonavi "
+                        "calibrate writes one) or a photo's camera JSON (K, width, height, gravity_cam, "
+                        "camera_height: the benchmark's form). --camera is the old name (console --camera is a "
+                        "live camera). Without it the intrinsics are ASSUMED (--fov, else the photo's EXIF 35 mm focal "
                         "length, else a 65 deg lens; flagged, with their uncertainty) and the mount is the default")
     p.add_argument("--fov", type=float, default=None, metavar="DEG",
-                   help="without --camera: the lens's horizontal field of view [deg]")
+                   help="without --camera-file: the lens's horizontal field of view [deg]")
     p.add_argument("--pose", default=None, help="robot pose at capture 'x,y[,z[,yaw_deg]]' (world frame, metres, degrees)")
     p.add_argument("--prompts", nargs="*", default=None, metavar="WORD",
                    help="what to look for (default: the catalog's prompts)")

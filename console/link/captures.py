@@ -1,7 +1,8 @@
 """Real photos from a folder instead of a camera (``--captures DIR``).
 
 The folder uses the layout of the development benchmark: every photo ``<name>.jpg`` / ``.png``
-sits next to ``<name>.json`` holding its intrinsics and, optionally, ground-truth objects::
+sits next to ``<name>.json`` holding its intrinsics and, optionally, ground-truth objects (the camera part is
+read by :mod:`pipeline.camera.photo_camera`, which ``map --camera`` uses too)::
 
     {"image": "000001.jpg", "width": 730, "height": 530,
      "K": [[fx, 0, cx], [0, fy, cy], [0, 0, 1]],
@@ -35,7 +36,8 @@ from typing import Any
 
 import numpy as np
 
-from pipeline.camera.geometry import CameraError, CameraMount, Intrinsics, mount_from_gravity_height
+from pipeline.camera.geometry import CameraError, CameraMount, Intrinsics
+from pipeline.camera.photo_camera import photo_intrinsics, photo_mount
 from pipeline.camera.image_io import ImageError, read_image, upright_size
 from pipeline.scene import SceneObject, Source
 
@@ -85,44 +87,18 @@ def read_json(path: Path) -> Any:
 
 
 def _photo_mount(meta: dict[str, Any], where: Path) -> CameraMount | None:
-    g, h = meta.get("gravity_cam"), meta.get("camera_height")
-    if g is None and h is None:
-        return None
-    if g is None or h is None:
-        raise CapturesError(f"{where}: 'gravity_cam' and 'camera_height' go together (the camera's pose "
-                            "for this photo); give both or neither")
-    gv = _vec(g, 3, f"{where}: gravity_cam")
-    n = math.sqrt(sum(v * v for v in gv))
-    if abs(n - 1.0) > 0.05:
-        raise CapturesError(f"{where}: gravity_cam must be a unit vector (camera frame), got length {n:.3g}")
-    if isinstance(h, bool) or not isinstance(h, (int, float)) or not math.isfinite(h) or not 0.0 < h <= 10.0:
-        raise CapturesError(f"{where}: camera_height must be a number within 0..10 m, got {h!r}")
-    return mount_from_gravity_height(tuple(v / n for v in gv), float(h))
+    try:
+        return photo_mount(meta, where)
+    except CameraError as exc:
+        raise CapturesError(str(exc)) from None
 
 
 def _intrinsics(meta: dict[str, Any], where: Path, size: tuple[int, int]) -> Intrinsics:
     """Intrinsics of the JSON, checked against the (upright) image ``size`` = (w, h) [px]."""
-    K = meta.get("K")
-    if not (isinstance(K, list) and len(K) == 3 and all(isinstance(r, list) and len(r) == 3 for r in K)
-            and all(isinstance(v, (int, float)) and not isinstance(v, bool) for r in K for v in r)):
-        raise CapturesError(f"{where}: 'K' must be a 3x3 list of numbers (the camera matrix [px])")
-    for key in ("width", "height"):
-        v = meta.get(key)
-        if v is None:
-            raise CapturesError(
-                f"{where}: '{key}' is required: 'width' and 'height' give the image size K is for "
-                f"(this image is {size[0]}x{size[1]}; a resized photo needs K scaled by the same factor)")
-        if isinstance(v, bool) or not isinstance(v, int) or v <= 0:
-            raise CapturesError(f"{where}: '{key}' must be a whole number of pixels > 0, got {v!r}")
-    dist = meta.get("dist", [])
-    if not isinstance(dist, list) or not all(isinstance(d, (int, float)) and not isinstance(d, bool) for d in dist):
-        raise CapturesError(f"{where}: 'dist' must be a list of numbers")
     try:
-        intr = Intrinsics.from_K(K, meta["width"], meta["height"], [float(d) for d in dist])
-        intr.check_image(*size)
-    except (CameraError, TypeError, ValueError) as exc:
-        raise CapturesError(f"{where}: {exc}") from None
-    return intr
+        return photo_intrinsics(meta, where, size)
+    except CameraError as exc:
+        raise CapturesError(str(exc)) from None
 
 
 def _find_image(meta_path: Path, meta: dict[str, Any]) -> Path:

@@ -31,6 +31,7 @@ from typing import Any, Callable
 from pipeline.scene import scene_to_dict
 
 from console.recording import recording_schemas as rs
+from console.recording.channel_schemas import schema_bytes
 from console.session.session_types import Notice, RobotSnapshot
 from console.session.topics import AGENT, CAPTURE, GRID, JOB, MISSION, NOTICE, ROBOT, ROUTE, RUN, SCENE, SELECTION, SETTINGS
 
@@ -283,7 +284,7 @@ class Recorder:
                 sid = self._writer.register_schema(schema.name, schema.encoding, bytes(schema.data))
                 cid = self._writer.register_channel(topic, "protobuf", sid)
             else:
-                sid = self._writer.register_schema(rs.JSON_TOPICS[topic], "jsonschema", b'{"type":"object"}')
+                sid = self._writer.register_schema(rs.JSON_TOPICS[topic], "jsonschema", schema_bytes(topic))
                 cid = self._writer.register_channel(topic, "json", sid)
             self._channels[topic] = cid
         return cid

@@ -36,8 +36,8 @@ from dataclasses import replace
 from pathlib import Path
 from typing import Any, Callable, Sequence
 
-from pipeline.scene import Scene, SceneObject
-from planner.grid import CostWeights, GridError, PlanningGrid, Workspace, build_grid
+from pipeline.scene import Scene
+from planner.grid import CostWeights, GridError, Workspace, build_grid
 from planner.mission import Mission
 from planner.route import PlanResult, Route, path_points
 
@@ -50,6 +50,7 @@ from console.session import mission_rules
 from console.session.merge import merge_observations
 from console.session.operator_session import OperatorRules
 from console.views.picking import goal_on_plane, ray_plane
+from console.session.session_reads import SessionReads
 from console.session.session_store import SESSION_FILE, SESSION_VERSION, Persistence
 from console.session.session_types import (
     CaptureRecord, Detection, JobStatus, Notice, RobotSnapshot, RouteSnapshot, RunStatus, SessionError, Settings,
@@ -69,7 +70,7 @@ __all__ = [
 log = logging.getLogger(__name__)
 
 
-class Session(Persistence, Undo, OperatorRules, KnownSpaceSession):
+class Session(SessionReads, Persistence, Undo, OperatorRules, KnownSpaceSession):
     """All console state, thread-safe, observable, persisted in one folder (see :class:`Persistence`).
 
     Args:
@@ -149,78 +150,6 @@ class Session(Persistence, Undo, OperatorRules, KnownSpaceSession):
         """Tell every listener (the recorder, the agent panel) what a language-model agent did: a tool
         call, a proposal or the operator's decision (:mod:`console.mcp`); ``event`` is JSON-ready."""
         self._emit([(AGENT, dict(event))])
-
-    # --- read access (snapshots) ---------------------------------------------------------------
-    @property
-    def workspace(self) -> Workspace:
-        return self._workspace
-
-    @property
-    def margin(self) -> float:
-        return self._margin
-
-    @property
-    def weights(self) -> CostWeights:
-        return self._weights
-
-    @property
-    def scene(self) -> Scene:
-        with self._lock:
-            return self._scene
-
-    @property
-    def grid(self) -> PlanningGrid:
-        with self._lock:
-            return self._grid
-
-    @property
-    def mission(self) -> Mission | None:
-        with self._lock:
-            return self._mission
-
-    @property
-    def capture(self) -> CaptureRecord | None:
-        with self._lock:
-            return self._capture
-
-    @property
-    def robot(self) -> RobotSnapshot | None:
-        with self._lock:
-            return self._robot
-
-    @property
-    def job(self) -> JobStatus:
-        with self._lock:
-            return self._job
-
-    @property
-    def run(self) -> RunStatus:
-        with self._lock:
-            return self._run
-
-    @property
-    def selected(self) -> SceneObject | None:
-        with self._lock:
-            if self._selected is None:
-                return None
-            try:
-                return self._scene.object(self._selected)
-            except KeyError:
-                return None
-
-    @property
-    def settings(self) -> Settings:
-        with self._lock:
-            return self._settings
-
-    def route_snapshot(self) -> RouteSnapshot:
-        """The route as world points, for drawing."""
-        with self._lock:
-            r, g = self._route, self._grid
-            segs = tuple(path_points(seg, g) for seg in r.registered)
-            cand = r.candidate.points(g) if r.candidate is not None else None
-            goals = tuple(tuple(float(v) for v in s[-1]) for s in segs if len(s))
-            return RouteSnapshot(r.start, segs, cand, r.candidate_goal, goals)  # type: ignore[arg-type]
 
     # --- settings --------------------------------------------------------------------------------
     def set_goal_mode(self, mode: str, altitude: float | None = None) -> None:

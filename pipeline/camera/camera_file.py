@@ -35,6 +35,7 @@ from pathlib import Path
 from typing import Any, Mapping, Sequence
 
 from pipeline.camera.geometry import CameraConfig, CameraError, CameraMount, Intrinsics
+from pipeline.camera.photo_camera import camera_config_from_photo_json
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -151,11 +152,14 @@ def camera_config_from_dict(data: Mapping[str, Any]) -> CameraConfig:
     return CameraConfig(intr, mount)
 
 
-def load_camera_toml(path: str | Path) -> CameraConfig:
-    """Read and validate ``camera.toml`` (format in the module docstring).
+def load_camera_file(path: str | Path) -> CameraConfig:
+    """Read and validate a camera file: ``camera.toml`` (format in the module docstring) or a photo's JSON
+    (``K``, ``width``, ``height``, optional ``dist``, ``gravity_cam`` + ``camera_height``: the development
+    benchmark's and ``--captures`` folders' form, :mod:`pipeline.camera.photo_camera`), told apart by content
+    (JSON starts with ``{``).
 
     Raises:
-        CameraError: Missing or unreadable file, invalid TOML, or a bad value (the message names it).
+        CameraError: Missing or unreadable file, invalid TOML / JSON, or a bad value (the message names it).
     """
     p = Path(path)
     try:
@@ -168,6 +172,12 @@ def load_camera_toml(path: str | Path) -> CameraConfig:
         raise CameraError(f"camera file {p} is not valid TOML: {exc}") from None
     except OSError as exc:
         raise CameraError(f"camera file {p}: cannot read: {exc.strerror or exc}") from None
+    if text.lstrip().startswith("{"):
+        try:
+            meta = json.loads(text)
+        except (json.JSONDecodeError, RecursionError) as exc:
+            raise CameraError(f"camera file {p} is not valid JSON: {exc}") from None
+        return camera_config_from_photo_json(meta, p)
     try:
         data = tomllib.loads(text)
     except (tomllib.TOMLDecodeError, RecursionError) as exc:
@@ -176,6 +186,10 @@ def load_camera_toml(path: str | Path) -> CameraConfig:
         return camera_config_from_dict(data)
     except CameraError as exc:
         raise CameraError(f"{p}: {exc}") from None
+
+
+load_camera_toml = load_camera_file
+"""The former name of :func:`load_camera_file` (it reads the photo JSON form too)."""
 
 
 def _fmt(v: float) -> str:
@@ -217,5 +231,5 @@ def write_camera_toml(path: str | Path, intr: Intrinsics, mount: CameraMount | N
     return p
 
 
-__all__ = ["camera_config_from_dict", "camera_toml_text", "intrinsics_from_table", "load_camera_toml",
+__all__ = ["camera_config_from_dict", "camera_toml_text", "intrinsics_from_table", "load_camera_file", "load_camera_toml",
            "mount_from_table", "write_camera_toml"]

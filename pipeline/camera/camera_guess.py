@@ -1,6 +1,6 @@
 """An assumed camera for photos without a calibration, with its uncertainty, flagged as assumed.
 
-When no camera file is given (``morphonavi map PHOTO`` without ``--camera``), the intrinsics are
+When no camera file is given (``morphonavi map PHOTO`` without ``--camera-file``), the intrinsics are
 assumed, in this order of preference:
 
 1. ``--fov DEG``: the horizontal field of view the user states -> ``fx = (W / 2) / tan(fov / 2)``,
@@ -54,7 +54,7 @@ class AssumedCamera:
         return (f"no camera file: intrinsics ASSUMED from {self.how}: fx = fy = {i.fx:.0f} px "
                 f"({math.degrees(i.hfov):.0f} deg horizontal field of view), principal point at the centre, no "
                 f"distortion; focal length and distances uncertain by +-{self.rel_sigma:.0%}. Calibrate the camera "
-                "with `morphonavi calibrate` and pass --camera camera.toml")
+                "with `morphonavi calibrate` and pass --camera-file camera.toml")
 
 
 def assumed_camera(width: int, height: int, *, hfov_deg: float | None = None,
@@ -82,7 +82,7 @@ def assumed_camera(width: int, height: int, *, hfov_deg: float | None = None,
         what = f"--fov {hfov_deg:g}" if hfov_deg is not None else f"the focal length assumed from {how}"
         raise CameraError(f"{what}: on this {width}x{height} px image fx = {f:.1f} px gives a {vfov:.1f} deg vertical "
                           f"field of view, over the limit of {MAX_FOV_DEG:g} deg (the image is far taller than "
-                          "wide): give a camera file (--camera) or a smaller --fov for this image")
+                          "wide): give a camera file (--camera-file) or a smaller --fov for this image")
     return AssumedCamera(Intrinsics(f, f, width / 2.0, height / 2.0, int(width), int(height)), sigma, how)
 
 

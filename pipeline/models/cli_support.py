@@ -11,7 +11,9 @@ from typing import Callable, Sequence
 from pipeline.models.base import ModelError
 from pipeline.models.fetch import fetch
 from pipeline.models.registry import (
+    MODEL_SET_ALIASES,
     MODEL_SETS,
+    model_set_name,
     format_table,
     get_spec,
     list_models,
@@ -26,6 +28,7 @@ def models_list(model_dir: Path | str | None = None) -> str:
     rows = [r.as_row() for r in list_models(model_dir)]
     dirs = ", ".join(str(d) for d in search_dirs(model_dir))
     sets = "; ".join(f"{s}: {', '.join(m)}" for s, m in MODEL_SETS.items())
+    sets += "".join(f" ({old} is the old name of {new})" for old, new in MODEL_SET_ALIASES.items())
     from pipeline.mapper_config import AUTO_SECOND  # the mapper adds these detectors when present
     from pipeline.models.registry import locate
 
@@ -36,7 +39,7 @@ def models_list(model_dir: Path | str | None = None) -> str:
 
 
 def expand_names(names: Sequence[str]) -> list[str]:
-    """Model names, with set names (``default``, ``offline``, ``cloud``) replaced by their
+    """Model names, with set names (``offline``, ``hub`` or its old name ``default``, ``cloud``) replaced by their
     downloadable members, and the detector the mapper runs beside a set's own when present
     (``offline``: the Open Images SSD, ``pipeline.mapper_config.AUTO_SECOND``), so that fetching a set
     gets what its figures were measured with; :class:`ModelError` for unknown names."""
@@ -44,6 +47,7 @@ def expand_names(names: Sequence[str]) -> list[str]:
 
     out: list[str] = []
     for name in names:
+        name = model_set_name(name)  # "default" is the hub set's old name
         members = MODEL_SETS.get(name, (name,)) + ((AUTO_SECOND[name],) if name in AUTO_SECOND else ())
         for m in members:
             spec = get_spec(m)

@@ -289,11 +289,20 @@ MODELS: dict[str, ModelSpec] = {
 }
 
 MODEL_SETS: dict[str, tuple[str, str, str]] = {
-    "default": ("owlv2", "mobilesam", "depth_anything_v2_small"),
     "offline": ("yolox_nano", "mobilesam", "fastdepth"),
+    "hub": ("owlv2", "mobilesam", "depth_anything_v2_small"),
     "cloud": ("grounding_dino_cloud", "mobilesam", "depth_anything_v2_small"),
 }
-"""Set name -> (detector, segmenter, depth estimator) model names."""
+"""Set name -> (detector, segmenter, depth estimator) model names. ``offline`` is what ``map`` / ``bench`` use
+unless ``--models`` says another."""
+
+MODEL_SET_ALIASES: dict[str, str] = {"default": "hub"}
+"""Old set names still accepted: ``default`` was the hub set's name, though ``offline`` is the default."""
 
 
-__all__ = ["CONVERTERS", "MODELS", "MODEL_SETS", "ModelFile", "ModelSpec", "Role", "converter", "require_converter"]
+def model_set_name(name: str) -> str:
+    """The current name of a model set (an old name from :data:`MODEL_SET_ALIASES` turned into its new one)."""
+    return MODEL_SET_ALIASES.get(name, name)
+
+
+__all__ = ["CONVERTERS", "MODELS", "MODEL_SETS", "MODEL_SET_ALIASES", "model_set_name", "ModelFile", "ModelSpec", "Role", "converter", "require_converter"]

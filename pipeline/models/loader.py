@@ -96,8 +96,8 @@ def load_models(
     *,
     label_map: Mapping[str, str] | None = None,
 ) -> ModelBundle:
-    """The detector, segmenter and depth estimator of a model set (``"default"``, ``"offline"``,
-    ``"cloud"``).
+    """The detector, segmenter and depth estimator of a model set (``"offline"``, ``"hub"``,
+    ``"cloud"``; ``"default"`` is the hub set's old name).
 
     Raises:
         ModelMissingError: Some files are missing; the message names ``morphonavi models fetch NAME``

@@ -11,8 +11,9 @@ extraction (``convert``: ``oidv4_ssd.onnx`` is made from MediaPipe's TFLite by
 :mod:`pipeline.models.ssd_convert`); the archive, the extracted bytes and the produced file each
 have their own checksum.
 
-Model sets: ``"default"`` (hub downloads: OWLv2, Depth Anything V2 Small, MobileSAM), ``"offline"``
-(YOLOX-Nano, MobileSAM, FastDepth: small files that run anywhere) and ``"cloud"`` (Grounding DINO
+Model sets: ``"offline"`` (the default: YOLOX-Nano, MobileSAM, FastDepth: small files that run anywhere),
+``"hub"`` (hub downloads: OWLv2, Depth Anything V2 Small, MobileSAM; its old name ``"default"`` is still
+accepted) and ``"cloud"`` (Grounding DINO
 1.5 Pro through the cloud API, with MobileSAM and Depth Anything V2 Small).
 
 The table of models and sets is :mod:`pipeline.models.known_models` (its names are re-exported
@@ -32,12 +33,14 @@ from pipeline.models.base import FETCH_COMMAND, ModelError
 from pipeline.models.cloud import API_KEY_ENV
 from pipeline.models.known_models import (  # noqa: F401 - re-exported: the registry's public names
     CONVERTERS,
+    MODEL_SET_ALIASES,
     MODEL_SETS,
     MODELS,
     ModelFile,
     ModelSpec,
     Role,
     converter,
+    model_set_name,
     require_converter,
 )
 
@@ -56,7 +59,7 @@ def get_spec(name: str) -> ModelSpec:
 
 def set_members(set_name: str) -> tuple[str, str, str]:
     """``(detector, segmenter, depth)`` model names of a set; :class:`ModelError` for unknown sets."""
-    members = MODEL_SETS.get(set_name)
+    members = MODEL_SETS.get(model_set_name(set_name))
     if members is None:
         raise ModelError(f"unknown model set {set_name!r}; known sets: {', '.join(MODEL_SETS)}")
     return members

@@ -1,3 +1,3 @@
 """How far each detected object is: the cues (size prior, ground contact, depth map), their fusion, and placement.
-The mapper uses :class:`pipeline.ranging.ranger.ranger.Ranger`; the cue modules are pure functions.
+The mapper uses :class:`pipeline.ranging.ranger.Ranger`; the cue modules are pure functions.
 """

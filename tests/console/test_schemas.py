@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import json
 import math
-import tomllib
+import sys
 from pathlib import Path
 
 import pytest
@@ -20,6 +20,11 @@ from pipeline.mapping.map_fusion import fuse
 from pipeline.scene import Capture, Scene, SceneObject, Source, save_scene
 from pipeline.schema_check import schema_errors
 from planner import mission as mission_module
+
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # pragma: no cover - Python 3.10 only
+    import tomli as tomllib
 
 REPO = Path(__file__).resolve().parents[2]
 
@@ -125,3 +130,19 @@ def test_camera_files_written_by_calibrate_validate(tmp_path: Path) -> None:
         _valid("camera", tomllib.loads(path.read_text()))
     bad = {"intrinsics": {"fx": 1, "fy": 1, "cx": 0, "cy": 0, "width": 10, "height": 10, "dist": [0.1, 0.2]}}
     assert schema_errors(schemas.SCHEMAS["camera"], bad)  # two coefficients is no OpenCV model
+
+
+def test_validate_a_file_from_the_command_line(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    good = save_scene(paper_room(), tmp_path / "room.json")
+    assert schemas.main(["--validate", "scene", str(good)]) == 0
+    assert "a valid scene file" in capsys.readouterr().out
+    data = json.loads(good.read_text())
+    data["objects"][2]["size"][0] = 0
+    bad = tmp_path / "bad.json"
+    bad.write_text(json.dumps(data))
+    assert schemas.main(["--validate", "scene", str(bad)]) == 1
+    assert capsys.readouterr().err == f"{bad}: objects[2].size[0]: must be > 0, got 0\n"
+    assert schemas.main(["--validate", "mission", str(tmp_path / "none.json")]) == 1
+    assert "cannot read" in capsys.readouterr().err
+    with pytest.raises(SystemExit):
+        schemas.main(["--validate", "nope", str(good)])

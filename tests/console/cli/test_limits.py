@@ -25,10 +25,10 @@ def _scene(tmp_path: Path, data: dict) -> Path:
 
 
 @pytest.mark.parametrize("robot,said", [
-    ("1e30,1,0,0", "--robot.x: must be within -10000..10000 m (the range of map --pose), got 1e+30"),
-    ("1,-10000.5", "--robot.y: must be within -10000..10000 m"),
-    ("1,1,1001", "--robot.z: must be within -1000..1000 m"),
-    ("1,1,0,361", "--robot.yaw_deg: must be within -360..360 deg"),
+    ("1e30,1,0,0", "--pose.x: must be within -10000..10000 m (the range of map --pose), got 1e+30"),
+    ("1,-10000.5", "--pose.y: must be within -10000..10000 m"),
+    ("1,1,1001", "--pose.z: must be within -1000..1000 m"),
+    ("1,1,0,361", "--pose.yaw_deg: must be within -360..360 deg"),
 ])
 def test_describe_robot_is_range_checked_like_pose(tmp_path: Path, capsys: pytest.CaptureFixture[str], robot: str,
                                                    said: str) -> None:

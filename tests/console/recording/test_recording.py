@@ -332,3 +332,24 @@ def test_the_live_view_serves_the_topics_over_the_foxglove_websocket_protocol(tm
             (pose.pose.position.x, pose.pose.position.y, pose.pose.position.z), abs=1e-9)
     finally:
         app.stop()
+
+
+def test_the_json_channels_carry_typed_schemas_their_messages_follow(recorded: Any) -> None:
+    """Foxglove reads the fields of a JSON channel from its jsonschema: every one is typed, and validates its data."""
+    from jsonschema import Draft202012Validator
+
+    path, _, _ = recorded
+    summary, msgs = read_all(path)
+    json_channels = [ch for ch in summary.channels.values() if ch.message_encoding == "json"]
+    assert {ch.topic for ch in json_channels} == set(JSON_SCHEMAS)
+    for ch in json_channels:
+        schema = summary.schemas[ch.schema_id]
+        assert schema.encoding == "jsonschema"
+        body = json.loads(schema.data)
+        assert body.get("properties"), (ch.topic, body)  # typed fields, not {"type": "object"}
+        validator = Draft202012Validator(body)
+        for topic, _, _, data in msgs:
+            if topic == ch.topic:
+                assert not list(validator.iter_errors(data)), (topic, data)
+    robot = json.loads(next(summary.schemas[c.schema_id] for c in json_channels if c.topic == "/robot/state").data)
+    assert robot["properties"]["battery"]["type"] == ["number", "null"]

@@ -22,6 +22,7 @@ from pipeline.models.registry import (
     locate,
     resolve_models_dir,
     search_dirs,
+    set_members,
     verify,
 )
 
@@ -30,7 +31,8 @@ SHARED_MODELS = Path(__file__).resolve().parents[3].parent / "shared" / "models"
 
 def test_registry_is_consistent() -> None:
     assert MODEL_SETS["offline"] == ("yolox_nano", "mobilesam", "fastdepth")
-    assert MODEL_SETS["default"] == ("owlv2", "mobilesam", "depth_anything_v2_small")
+    assert MODEL_SETS["hub"] == ("owlv2", "mobilesam", "depth_anything_v2_small")
+    assert set_members("default") == MODEL_SETS["hub"]  # the hub set's old name is still accepted
     for names in MODEL_SETS.values():
         roles = [MODELS[n].role for n in names]
         assert roles == ["detector", "segmenter", "depth"]
@@ -97,7 +99,7 @@ def test_missing_models_name_the_fetch_command(tmp_path: Path) -> None:
     expected = r"^model 'mobilesam' not found .*fetch with: morphonavi models fetch mobilesam$"
     with pytest.raises(ModelMissingError, match=expected):
         load_models("offline", base)
-    with pytest.raises(ModelError, match="unknown model set 'fast'; known sets: default, offline, cloud"):
+    with pytest.raises(ModelError, match="unknown model set 'fast'; known sets: offline, hub, cloud"):
         load_models("fast", base)
 
 

@@ -1,0 +1,90 @@
+"""The session's read access: thread-safe snapshots of its state (mixed into :class:`console.session.session.Session`).
+
+Every property takes the session's lock and returns an immutable value (or the current object of an
+immutable type); world frame (z up) [m], yaw [rad].
+"""
+
+from __future__ import annotations
+
+from pipeline.scene import Scene, SceneObject
+from planner.grid import CostWeights, PlanningGrid, Workspace
+from planner.mission import Mission
+from planner.route import path_points
+
+from console.session.session_core import SessionCore
+from console.session.session_types import CaptureRecord, JobStatus, RobotSnapshot, RouteSnapshot, RunStatus, Settings
+
+
+class SessionReads(SessionCore):
+    """Read-only properties of the session's state."""
+
+    @property
+    def workspace(self) -> Workspace:
+        return self._workspace
+
+    @property
+    def margin(self) -> float:
+        return self._margin
+
+    @property
+    def weights(self) -> CostWeights:
+        return self._weights
+
+    @property
+    def scene(self) -> Scene:
+        with self._lock:
+            return self._scene
+
+    @property
+    def grid(self) -> PlanningGrid:
+        with self._lock:
+            return self._grid
+
+    @property
+    def mission(self) -> Mission | None:
+        with self._lock:
+            return self._mission
+
+    @property
+    def capture(self) -> CaptureRecord | None:
+        with self._lock:
+            return self._capture
+
+    @property
+    def robot(self) -> RobotSnapshot | None:
+        with self._lock:
+            return self._robot
+
+    @property
+    def job(self) -> JobStatus:
+        with self._lock:
+            return self._job
+
+    @property
+    def run(self) -> RunStatus:
+        with self._lock:
+            return self._run
+
+    @property
+    def selected(self) -> SceneObject | None:
+        with self._lock:
+            if self._selected is None:
+                return None
+            try:
+                return self._scene.object(self._selected)
+            except KeyError:
+                return None
+
+    @property
+    def settings(self) -> Settings:
+        with self._lock:
+            return self._settings
+
+    def route_snapshot(self) -> RouteSnapshot:
+        """The route as world points, for drawing."""
+        with self._lock:
+            r, g = self._route, self._grid
+            segs = tuple(path_points(seg, g) for seg in r.registered)
+            cand = r.candidate.points(g) if r.candidate is not None else None
+            goals = tuple(tuple(float(v) for v in s[-1]) for s in segs if len(s))
+            return RouteSnapshot(r.start, segs, cand, r.candidate_goal, goals)  # type: ignore[arg-type]
