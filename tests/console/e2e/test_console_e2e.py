@@ -164,7 +164,7 @@ def test_operator_maps_the_room_and_builds_a_mission(console: ConsoleApp, tmp_pa
             assert wait_until(lambda: len(app.server.get_clients()) == 1, 15), "the page did not connect"
 
             # --- Capture & map (simulated robot, ground-truth perception) ---------------------------
-            capture.click()
+            capture.click(timeout=120_000)  # a loaded machine's page can take long to act on a click
             assert wait_until(lambda: session.job.name == JOB_NAME and not session.job.running and session.job.fraction == 1.0, 60), session.job
             assert len(session.scene.objects) >= 10, "the first photo should show the obstacles in front"
             counts = session.grid.counts()
