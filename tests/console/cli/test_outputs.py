@@ -98,3 +98,18 @@ def test_session_and_watched_folder_apart(tmp_path: Path) -> None:
     with pytest.raises(OutputError):
         check_folders_apart([("--session", tmp_path), ("--scene", tmp_path / "inner")])
     check_folders_apart([("--session", tmp_path / "a"), ("--scene", tmp_path / "b")])
+
+
+@pytest.mark.parametrize("code,said", [(13, "no permission to write in"), (30, "is on a read-only file system"),
+                                       (28, "the disk is full")])
+def test_write_errors_are_in_words_even_as_root(tmp_path: Path, monkeypatch: pytest.MonkeyPatch, code: int,
+                                                said: str) -> None:
+    import pipeline.scene
+
+    def fail(path: Path, text: str) -> Path:
+        raise OSError(code, os.strerror(code), str(path))
+
+    monkeypatch.setattr(pipeline.scene, "write_text_atomic", fail)
+    with pytest.raises(OutputError) as e:
+        write_output(tmp_path / "m.json", "{}")
+    assert f"--out {tmp_path / 'm.json'}: cannot write: {said}" in str(e.value) and "Errno" not in str(e.value)
