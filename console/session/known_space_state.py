@@ -296,7 +296,10 @@ class KnownSpaceSession:
                  upd.rays, upd.seconds, upd.free_cells, upd.occupied_cells)
         with self._lock:
             self._known = new
-            self._set_scene_locked(self._scene, f"capture {capture_id}", f"capture:{capture_id}")
+            notes = self._set_scene_locked(self._scene, f"capture {capture_id}", f"capture:{capture_id}")
+            for note in notes:  # what the known space changed in the route (a goal not seen yet ...): said, not silent
+                if note.startswith("candidate dropped"):
+                    self._outbox.append(Notice("Route", f"capture {capture_id}: {note}", "warning"))
         summary = self.known_summary()
         self._emit([(GRID, None), (ROUTE, None), (MISSION, None), (KNOWN_SPACE, summary)])
         return summary

@@ -354,7 +354,7 @@ class _FakePerceiver:
         progress(0.5, "detecting")
         scene = _line_of_boxes()
         dets = tuple(Detection(o.label, 0.8, (1.0, 1.0, 5.0, 5.0), o.id) for o in scene.objects)
-        return Perception(scene, dets, np.ones(shot.image.shape[:2], np.float32), {"total": 0.01})
+        return Perception(scene, dets, None, {"total": 0.01})  # no depth model: the boxes bound the rays
 
 
 def _shot() -> CaptureResult:
@@ -364,8 +364,8 @@ def _shot() -> CaptureResult:
 
 
 def test_mapping_job_spawns_objects_and_reports_progress(session: Session) -> None:
-    jobs = []
-    session.subscribe(lambda t, p: jobs.append(p) if t == "job" else None)
+    jobs, notices = [], []
+    session.subscribe(lambda t, p: jobs.append(p) if t == "job" else notices.append(p) if t == NOTICE else None)
     assert session.add_goal((2.5, 5.7, 0.0)).ok
     job = MappingJob(session, _shot, _FakePerceiver())
     assert job.start()
@@ -376,7 +376,10 @@ def test_mapping_job_spawns_objects_and_reports_progress(session: Session) -> No
     fractions = [j.fraction for j in jobs]
     assert fractions == sorted(fractions) and jobs[-1].fraction == 1.0 and not jobs[-1].running
     assert any("detecting" in j.message for j in jobs)
-    assert session.route_snapshot().candidate[:, 2].max() > 1.2  # replanned over the new line
+    # the goal behind the new line is floor no capture has seen (the line hides it): the candidate is
+    # dropped, and the operator is told why and where to look from
+    assert session.route_snapshot().candidate is None
+    assert any(n.title == "Route" and "candidate dropped" in n.body and "not seen yet" in n.body for n in notices)
 
 
 def test_mapping_job_failure_is_reported_not_raised(session: Session) -> None:
