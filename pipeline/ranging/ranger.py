@@ -224,8 +224,9 @@ class Ranger:
         upper bound (:func:`pipeline.ranging.occlusion.contact_as_bound`)."""
         live = [o for o in objects if not o.skipped]
         for obj, occ in zip(live, bottom_occluders([o.detection.box for o in live])):
-            if occ is not None and obj.cue("ground_contact") is not None:
-                obj.contact_hidden_by = live[occ].detection.label
+            if obj.cue("ground_contact") is not None and (occ is not None or obj.truncation.horizontal_cut):
+                # a side border hides the bottom's part beyond it, often the nearest (an object off-axis)
+                obj.contact_hidden_by = live[occ].detection.label if occ is not None else "image border"
 
     def depth_scale(self, objects: list[MappedObject], depth_map: DepthMap | None) -> DepthScale | None:
         """Metric conversion of the depth map, fitted from the objects of known size when configured."""

@@ -124,3 +124,16 @@ def test_people_on_ground_higher_than_the_cameras_widen_the_contact_instead_of_m
                          INTR, given, True, g, 1.5, None, 0.05)
     assert not level.remeasure and all(x is given for x in level.grounds)
     assert floor_spread(contacts_of(crowd)[0][:2], g, 1.5, INTR) == 0.0  # two objects cannot tell
+
+
+def test_a_side_cut_box_s_contact_may_be_hidden_by_the_border() -> None:
+    from pipeline.ranging.ranger import Ranger
+
+    def obj(box, trunc):
+        gc = Cue("ground_contact", 5.0, 0.3)
+        return SimpleNamespace(skipped=None, detection=SimpleNamespace(box=box, label="cabinet"), truncation=trunc,
+                               contact_hidden_by=None, cue=lambda name: gc if name == "ground_contact" else None)
+
+    cut, whole = obj((0.0, 100.0, 200.0, 400.0), Truncation(left=True)), obj((500.0, 100.0, 700.0, 400.0), Truncation())
+    Ranger.mark_hidden_contacts([cut, whole])
+    assert cut.contact_hidden_by == "image border" and whole.contact_hidden_by is None
