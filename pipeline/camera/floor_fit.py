@@ -5,9 +5,9 @@ Camera frame throughout (OpenCV: x right, y down, z forward) [m]. The floor is t
 :mod:`pipeline.ranging.ground_contact`.
 
 The floor is described by three numbers relative to a reference gravity ``g0`` (the given or
-assumed camera pose): a pitch ``theta`` (rotation about the camera x axis, positive looks further
-down), a roll ``phi`` (about the optical axis, positive turns gravity towards -x... i.e. the right
-side of the image goes down) and ``ln H``. :func:`fit_floor` estimates them by robust (Cauchy)
+assumed camera pose): a pitch ``theta`` (rotation of gravity about the camera x axis, positive looks
+further down), a roll ``phi`` (rotation of gravity about the optical axis) and ``ln H``; a size error
+common to all of a photo's contacts is a fourth parameter (:data:`COMMON_SIZE_SIGMA`), marginalised out. :func:`fit_floor` estimates them by robust (Cauchy)
 least squares from up to three kinds of evidence, each with its own 1-sigma:
 
 - **a prior** (the given pose with its small sigmas, or when no pose is given a level camera at a
