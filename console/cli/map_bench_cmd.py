@@ -178,8 +178,11 @@ def cmd_map(args: argparse.Namespace) -> int:
     assumed = None
     if camera is None:  # uncalibrated: a documented default, flagged in the output and the scene
         assumed = assumed_camera(image.shape[1], image.shape[0], hfov_deg=args.fov, focal_35mm=loaded.focal_35mm)
-        camera = CameraConfig(assumed.intrinsics)
+        camera = CameraConfig(assumed.intrinsics, mount_given=False)
         print(f"warning: {assumed.warning}")
+    if not camera.mount_given:  # no [mount] / gravity_cam: fitted from the photo, never taken as level
+        print("note: the camera's pitch, roll and height are not given (no [mount] in the camera file, no "
+              "gravity_cam / camera_height): they are fitted from the photo's floor", file=sys.stderr)
     catalog = _catalog(args)
     if args.prompts is not None:
         prompts_from_words(catalog, args.prompts)  # empty list -> error before loading models
@@ -189,7 +192,7 @@ def cmd_map(args: argparse.Namespace) -> int:
         print(f"note: {models.note}", file=sys.stderr)
     with Mapper(models, catalog, _config(args)) as mapper:
         result = mapper.run(image, camera.intrinsics, camera.mount, pose, prompts=args.prompts,
-                            image_name=Path(args.image).name)
+                            image_name=Path(args.image).name, pose_given=camera.mount_given)
     scene = result.scene
     if assumed is not None:
         import dataclasses

@@ -149,7 +149,7 @@ def camera_config_from_dict(data: Mapping[str, Any]) -> CameraConfig:
             raise CameraError(f"[{key}]: unknown table (expected [intrinsics], optional [mount], [calibration])")
     intr = intrinsics_from_table(data.get("intrinsics"))
     mount = mount_from_table(data.get("mount", {}))
-    return CameraConfig(intr, mount)
+    return CameraConfig(intr, mount, mount_given="mount" in data)
 
 
 def load_camera_file(path: str | Path) -> CameraConfig:

@@ -236,10 +236,16 @@ def ray_directions(uv: np.ndarray | Sequence[float], intr: Intrinsics) -> np.nda
 
 @dataclass(frozen=True)
 class CameraConfig:
-    """A camera description as read from ``camera.toml``: intrinsics and mount."""
+    """A camera description as read from ``camera.toml``: intrinsics and mount.
+
+    ``mount_given``: whether the file said where the camera points (a ``[mount]`` table, or a photo's
+    ``gravity_cam`` + ``camera_height``); when not, ``mount`` is the default and the mapper fits the
+    camera's pitch, roll and height from the photo instead of taking it as level.
+    """
 
     intrinsics: Intrinsics
     mount: CameraMount = field(default_factory=CameraMount)
+    mount_given: bool = True
 
 
 def parse_pose(text: str, where: str = "pose") -> Pose:

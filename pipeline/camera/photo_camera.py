@@ -84,7 +84,7 @@ def camera_config_from_photo_json(meta: Any, where: object) -> CameraConfig:
         raise CameraError(f"{where}: must be a JSON object, got {type(meta).__name__}")
     intr = photo_intrinsics(meta, where)
     mount = photo_mount(meta, where)
-    return CameraConfig(intr) if mount is None else CameraConfig(intr, mount)
+    return CameraConfig(intr, mount_given=False) if mount is None else CameraConfig(intr, mount)
 
 
 __all__ = ["camera_config_from_photo_json", "photo_intrinsics", "photo_mount"]
