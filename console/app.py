@@ -349,6 +349,13 @@ class ConsoleApp:
         with gui.add_folder("Plan"):
             paths_holder["p"] = self.views["paths"] = PathsView(server, session)
             self.views["unknown_toggle"] = UnknownToggle(server, session)
+        with gui.add_folder("Find", expand_by_default=False):  # the search: viewpoints, moves, captures until found
+            from console.session.search import SearchJob, target_height
+            from console.views.search_view import SearchView
+
+            self.search = SearchJob(session, self.link, self.mapping, self.runner)
+            self._closers.append(self.search.stop)
+            self.views["search"] = SearchView(server, session, self.search, target_height)
         with gui.add_folder("Scene summary"):
             self.views["summary"] = SceneSummaryView(server, session)
             self._closers.append(self.views["summary"].close)

@@ -195,9 +195,10 @@ def _extra_commands() -> list[Callable[[argparse._SubParsersAction], None]]:  # 
 
     from console.cli.mcp_cmd import add_mcp_parser
     from console.cli.replay_cmd import add_replay_parser
+    from console.cli.search_cmd import add_search_parser
 
     return [add_console_parser, add_map_parser, add_bench_parser, add_describe_parser, add_calibrate_parser,
-            add_replay_parser, add_mcp_parser]
+            add_replay_parser, add_mcp_parser, add_search_parser]
 
 
 def main(argv: Sequence[str] | None = None) -> int:

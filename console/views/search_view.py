@@ -1,0 +1,119 @@
+"""The Find panel: what to find, the mode and budgets, Start / Approve step / Pause / Resume / Stop,
+and the chosen viewpoint drawn in the scene with its gain and cost.
+
+The buttons turn clicks into :class:`~console.session.search.SearchJob` calls; the steps show in
+the panel's line and in the Map folder's job line ("Find: robot dog: next viewpoint ...").
+"""
+
+from __future__ import annotations
+
+import html
+import threading
+from typing import Any, Callable
+
+import numpy as np
+import viser
+
+from console.session.search import MODES, SearchConfig, SearchJob
+from console.session.session import JOB, RUN, Session, SessionError
+from console.views.client_notice import tell
+
+
+class SearchView:
+    """Find controls in the current GUI container.
+
+    Args:
+        server: The viser server (the viewpoint marker goes into its scene).
+        session: Its job and run status enable the buttons.
+        job: The search.
+        height_of: The target's height [m] for a class or prompt (the catalog's).
+    """
+
+    def __init__(self, server: viser.ViserServer, session: Session, job: SearchJob,
+                 height_of: Callable[[str], float]) -> None:
+        self._server, self._session, self._job, self._height_of = server, session, job, height_of
+        gui = server.gui
+        self.target = gui.add_text("Find", "robot dog", hint="A catalog class or the words for the object")
+        self.mode = gui.add_dropdown("Search mode", MODES, initial_value="auto",
+                                     hint="auto: moves on its own; step: each move waits for Approve step")
+        self.captures = gui.add_number("Capture budget", 12, min=1, max=200, step=1)
+        self.minutes = gui.add_number("Time budget [min]", 15.0, min=0.5, max=600.0, step=0.5)
+        self.start = gui.add_button("Start search", icon=viser.Icon.SEARCH, color="blue",
+                                    hint="Capture, choose the next viewpoint, go there, repeat until it is found")
+        self.approve = gui.add_button("Approve step", icon=viser.Icon.CHECK, visible=False)
+        self.pause = gui.add_button("Pause search", icon=viser.Icon.PLAYER_PAUSE, visible=False,
+                                    hint="End the move where the robot is (it holds); Resume plans again from there")
+        self.resume = gui.add_button("Resume search", icon=viser.Icon.PLAYER_PLAY, visible=False)
+        self.stop = gui.add_button("Stop search", icon=viser.Icon.PLAYER_STOP, visible=False)
+        self.line = gui.add_markdown("")
+        self.start.on_click(lambda e: self._act(e, self._start))
+        self.approve.on_click(lambda e: self._act(e, job.approve))
+        self.pause.on_click(lambda e: self._act(e, job.pause))
+        self.resume.on_click(lambda e: self._act(e, job.resume))
+        self.stop.on_click(lambda e: self._act(e, job.stop))
+        self._marker: Any = None
+        self._label: Any = None
+        self._drawn: Any = None
+        session.subscribe(self._on_event)
+        self.refresh()
+
+    def _start(self) -> None:
+        target = str(self.target.value).strip()
+        try:
+            captures = int(self.captures.value)
+            minutes = float(self.minutes.value)
+        except (TypeError, ValueError):
+            raise SessionError("the budgets must be numbers") from None
+        self._job.start(SearchConfig(target, mode=str(self.mode.value), max_captures=captures,
+                                     max_time=60.0 * minutes, target_height=self._height_of(target)))
+
+    def _act(self, event: Any, action: Callable[[], Any]) -> None:
+        try:
+            action()
+        except SessionError as exc:
+            tell(event.client, "Not possible", str(exc), "yellow", 7.0)
+        self.refresh()
+
+    def _on_event(self, topic: str, payload: Any) -> None:
+        if topic in (JOB, RUN):
+            threading.Thread(target=self.refresh, daemon=True).start()  # never block the session's caller
+
+    def drawn_viewpoint(self) -> Any:
+        """The viewpoint drawn now (tests), or ``None``."""
+        return self._drawn
+
+    def refresh(self) -> None:
+        """Buttons, the step line and the viewpoint marker as the search's state allows."""
+        job = self._job
+        running, paused = job.running, job.paused
+        self.start.disabled = running or self._session.run.active
+        self.approve.visible = running and job.waiting_approval
+        self.pause.visible = running and not paused
+        self.resume.visible = running and paused
+        self.stop.visible = running
+        steps = job.steps
+        r = job.result
+        if r is not None and not running and r.reason:
+            text = f"<b>{'found' if r.found else 'ended'}</b>: {html.escape(r.reason)} ({r.captures} captures, {r.path_length:.1f} m)"
+        else:
+            text = html.escape(steps[-1]) if steps else ""
+        self.line.content = f"<small>{text}</small>"
+        vp = job.chosen if running else None
+        if vp is not self._drawn:
+            self._drawn = vp
+            for h in (self._marker, self._label):
+                if h is not None:
+                    try:
+                        h.remove()
+                    except Exception:
+                        pass
+            self._marker = self._label = None
+            if vp is not None:
+                e = np.asarray(vp.eye, dtype=np.float32)
+                tip = e + 0.6 * np.array([np.cos(vp.yaw), np.sin(vp.yaw), 0.0], dtype=np.float32)
+                self._marker = self._server.scene.add_line_segments(
+                    "/search/viewpoint", points=np.array([[e, tip]], dtype=np.float32),
+                    colors=(255, 140, 0), thickness=0.04)
+                self._label = self._server.scene.add_label(
+                    "/search/viewpoint_why", f"next viewpoint: gain {vp.gain:.1f} m³, cost {vp.cost:.1f}",
+                    position=tuple(float(v) for v in e))
