@@ -127,7 +127,7 @@ def add_search_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[
     p.add_argument("--world", type=Path, default=None, metavar="FILE",
                    help="the simulator's hidden room (a world file; default the paper's room)")
     p.add_argument("--out", default=None, metavar="FILE", help="write the result as JSON here (e.g. result.json)")
-    p.add_argument("--max-captures", type=int, default=12, help="capture budget (default 12)")
+    p.add_argument("--max-captures", type=int, default=20, help="capture budget (default 20)")
     p.add_argument("--max-time", type=float, default=900.0, help="time budget [s] (default 900)")
     p.add_argument("--time-scale", type=float, default=8.0,
                    help="simulated seconds per wall-clock second (default 8)")

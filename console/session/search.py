@@ -74,7 +74,7 @@ class SearchConfig:
 
     target: str
     mode: str = "auto"
-    max_captures: int = 12
+    max_captures: int = 20
     max_time: float = 900.0
     target_height: float = 0.6
 

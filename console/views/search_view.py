@@ -36,7 +36,7 @@ class SearchView:
         self.target = gui.add_text("Find", "robot dog", hint="A catalog class or the words for the object")
         self.mode = gui.add_dropdown("Search mode", MODES, initial_value="auto",
                                      hint="auto: moves on its own; step: each move waits for Approve step")
-        self.captures = gui.add_number("Capture budget", 12, min=1, max=200, step=1)
+        self.captures = gui.add_number("Capture budget", 20, min=1, max=200, step=1)
         self.minutes = gui.add_number("Time budget [min]", 15.0, min=0.5, max=600.0, step=0.5)
         self.start = gui.add_button("Start search", icon=viser.Icon.SEARCH, color="blue",
                                     hint="Capture, choose the next viewpoint, go there, repeat until it is found")
