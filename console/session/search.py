@@ -244,16 +244,12 @@ class SearchJob:
         self._last_pos = p  # type: ignore[assignment]
         return p  # type: ignore[return-value]
 
-    def _track(self) -> None:
-        """Add the robot's travel to the path length while a move runs."""
-        self._pos()
-
     def _hold_while_paused(self) -> bool:
         """Wait while paused; ``False`` when stopped."""
         if self._pause.is_set() and not self._stop.is_set():
             self._say("paused (Resume plans again from where the robot is, Stop ends)")
             while self._pause.is_set() and not self._stop.is_set():
-                self._track()
+                self._pos()  # the travel adds to the path length
                 time.sleep(0.05)
         return not self._stop.is_set()
 
@@ -324,7 +320,7 @@ class SearchJob:
         self._runner.execute(mission)
         deadline = time.monotonic() + MISSION_TIMEOUT
         while time.monotonic() < deadline:
-            self._track()
+            self._pos()  # the travel adds to the path length
             state = s.run.state
             if self._stop.is_set():
                 return "stopped by the operator"
@@ -340,7 +336,7 @@ class SearchJob:
             if state in ("done", "aborted", "failed") or (state == "idle" and not s.run.active):
                 break
             time.sleep(0.05)
-        self._track()
+        self._pos()  # the travel adds to the path length
         return None if s.run.state == "done" else f"the move ended {s.run.state}: {s.run.message}"
 
     def _abort_move(self) -> None:
