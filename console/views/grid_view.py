@@ -1,8 +1,16 @@
 """The workspace and its planning grid in the 3D view.
 
-Draws the floor, the workspace bounds and the grid cells as three separately toggleable layers:
-occupied (red), dangerous (yellow) and free (blue), each one batched mesh so tens of thousands of
-cells stay fluid. Free cells are drawn on the goal layer only (the floor, or the chosen goal
+Draws the floor, the workspace bounds and the grid cells as four separately toggleable layers, each
+one batched mesh so tens of thousands of cells stay fluid, sorted by why a cell is closed
+(:attr:`PlanningGrid.reason`):
+
+- occupied (red): obstacles only: inside a mapped object, a depth surface an object explains, or
+  under a floating object (unlabelled obstacles are drawn magenta by the known-space view);
+- dangerous (yellow): the robot's clearance around an obstacle (closed) and the dearer band beyond it;
+- free (blue);
+- unknown (translucent grey, off by default): cells closed only because no capture has seen them.
+
+ Free cells are drawn on the goal layer only (the floor, or the chosen goal
 altitude): that is the layer a click puts a goal on, and a full 3D lattice of free cells would
 hide everything else. All positions are world frame (z up) [m].
 """
@@ -16,33 +24,61 @@ import numpy as np
 import trimesh
 import viser
 
-from planner.grid import CellState, PlanningGrid
+from planner.grid import CellState, Closed, PlanningGrid
 
 from console.session.session import GRID, SETTINGS, Session
 
 OCCUPIED_RGB = (220, 50, 47)
 DANGEROUS_RGB = (240, 190, 30)
 FREE_RGB = (70, 130, 230)
+UNKNOWN_RGB = (150, 150, 155)
+
+OBSTACLE_REASONS = (Closed.OBJECT, Closed.SURFACE, Closed.BENEATH)
+"""Closed cells the red layer draws (:attr:`Closed.UNLABELLED` is the known-space view's magenta layer)."""
 
 _LAYERS: tuple[tuple[str, CellState, tuple[int, int, int], float, float], ...] = (
     # name, state, colour, size as a fraction of the cell, opacity
     ("occupied", CellState.OCCUPIED, OCCUPIED_RGB, 0.32, 0.75),
     ("dangerous", CellState.DANGEROUS, DANGEROUS_RGB, 0.2, 0.75),
     ("free", CellState.FREE, FREE_RGB, 0.22, 0.7),
+    ("unknown", CellState.OCCUPIED, UNKNOWN_RGB, 0.2, 0.25),
 )
 
 
-def layer_cells(grid: PlanningGrid, state: CellState, max_height: float | None = None,
+def layer_mask(grid: PlanningGrid, name: str) -> np.ndarray:
+    """Boolean ``[nx, ny, nz]`` of the cells the layer ``name`` draws.
+
+    ``occupied``: obstacle cells (:data:`OBSTACLE_REASONS`; every occupied cell on a grid without
+    reasons); ``dangerous``: dangerous cells and closed clearance cells (:attr:`Closed.CLEARANCE`);
+    ``free``: free cells; ``unknown``: cells closed only because they were not seen (:attr:`Closed.UNKNOWN`).
+    """
+    reason = grid.reason
+    if name == "free":
+        return grid.state == CellState.FREE
+    if name == "dangerous":
+        mask = grid.state == CellState.DANGEROUS
+        return mask if reason is None else mask | (reason == Closed.CLEARANCE)
+    if name == "occupied":
+        if reason is None:
+            return grid.state == CellState.OCCUPIED
+        return np.isin(reason, [int(r) for r in OBSTACLE_REASONS])
+    if name == "unknown":
+        return np.zeros(grid.state.shape, bool) if reason is None else reason == Closed.UNKNOWN
+    raise ValueError(f"layer: must be one of occupied, dangerous, free, unknown, not {name!r}")
+
+
+def layer_cells(grid: PlanningGrid, state: CellState | np.ndarray, max_height: float | None = None,
                 level: int | None = None) -> np.ndarray:
     """World centres [m] (N x 3) of the cells in ``state``.
 
     Args:
         grid: The planning grid.
-        state: Which cells.
+        state: Which cells: a cell state, or a boolean mask shaped like the grid (:func:`layer_mask`).
         max_height: Only cells whose bottom is below this height above the floor [m].
         level: Only cells of this layer index (0 = ground).
     """
-    idx = np.argwhere(grid.state == state)
+    mask = state if isinstance(state, np.ndarray) else grid.state == state
+    idx = np.argwhere(mask)
     ws = grid.workspace
     if max_height is not None and len(idx):
         bottom = ws.floor + idx[:, 2] * ws.resolution
@@ -68,11 +104,14 @@ class GridView:
         self._handles: dict[str, Any] = {}
         ws = session.workspace
         self._checks: dict[str, viser.GuiCheckboxHandle] = {}
-        defaults = {"occupied": True, "dangerous": True, "free": True}
+        defaults = {"occupied": True, "dangerous": True, "free": True, "unknown": False}
         hints = {
-            "occupied": "Cells inside an obstacle: impassable (red)",
-            "dangerous": "Cells within the robot's margin of an obstacle: high cost (yellow)",
+            "occupied": "Obstacle cells: inside a mapped object or a surface the depth saw; impassable (red). "
+                        "Unlabelled obstacles are the magenta layer",
+            "dangerous": "Cells within the robot's radius of an obstacle (impassable) or its margin beyond "
+                         "(high cost) (yellow)",
             "free": "Free cells of the goal layer (the floor, or the goal altitude): where a click puts a goal",
+            "unknown": "Cells closed only because no capture has seen them yet (translucent grey). Off by default",
         }
         self._counts = server.gui.add_markdown("")
         with server.gui.add_folder("Layers", expand_by_default=False) as folder:
@@ -85,7 +124,7 @@ class GridView:
             top = ws.max[2] - ws.floor
             self._height = server.gui.add_slider(
                 "Cells up to [m]", min=ws.resolution, max=top, step=ws.resolution, initial_value=top,
-                hint="Hide occupied and dangerous cells above this height (metres above the floor)",
+                hint="Hide occupied, dangerous and unknown cells above this height (metres above the floor)",
             )
         self._height.on_update(lambda _e: self.redraw())
         self._draw_workspace()
@@ -121,12 +160,13 @@ class GridView:
         return {name: bool(cb.value) for name, cb in self._checks.items()}
 
     def redraw(self) -> None:
-        """Redraw the three layers from the session's current grid."""
+        """Redraw the four layers from the session's current grid."""
         with self._lock:  # read the state inside the lock: the last redraw always draws the latest state
             grid = self._session.grid
             ws = grid.workspace
             max_h = float(self._height.value)
             counts = grid.counts()
+            masks = {name: layer_mask(grid, name) for name, _, _, _, _ in _LAYERS}
             goal_cell = ws.cell_of((ws.min[0], ws.min[1], min(self._session.goal_height(), ws.max[2])))
             level = goal_cell[2] if goal_cell is not None else 0
             for name, state, rgb, frac, opacity in _LAYERS:
@@ -134,10 +174,10 @@ class GridView:
                 old = self._handles.pop(name, None)
                 if not self._checks[name].value:
                     pts = np.zeros((0, 3))
-                elif state is CellState.FREE:
-                    pts = layer_cells(grid, state, level=level)
+                elif name == "free":
+                    pts = layer_cells(grid, masks[name], level=level)
                 else:
-                    pts = layer_cells(grid, state, max_h)
+                    pts = layer_cells(grid, masks[name], max_h)
                 if len(pts) == 0:
                     if old is not None:
                         old.remove()
@@ -159,9 +199,10 @@ class GridView:
                 self._handles[name] = handle
             self._counts.content = (
                 f"<small>Grid {ws.shape[0]}×{ws.shape[1]}×{ws.shape[2]} at {ws.resolution:g} m: "
-                f"<b style='color:rgb{OCCUPIED_RGB}'>{counts['occupied']}</b> occupied · "
-                f"<b style='color:rgb{(180, 140, 0)}'>{counts['dangerous']}</b> dangerous · "
-                f"<b style='color:rgb{FREE_RGB}'>{counts['free']}</b> free</small>"
+                f"<b style='color:rgb{OCCUPIED_RGB}'>{int(masks['occupied'].sum())}</b> occupied · "
+                f"<b style='color:rgb{(180, 140, 0)}'>{int(masks['dangerous'].sum())}</b> dangerous · "
+                f"<b style='color:rgb{FREE_RGB}'>{counts['free']}</b> free · "
+                f"<b style='color:rgb{(110, 110, 115)}'>{int(masks['unknown'].sum())}</b> unknown</small>"
             )
 
     def drawn_counts(self) -> dict[str, int]:

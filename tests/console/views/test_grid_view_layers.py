@@ -1,0 +1,79 @@
+"""The grid layers without a browser: after a capture with known space the red "occupied" layer
+draws the obstacle cells only, not the cells closed because they are unknown or within the robot's
+clearance; those go to the (off by default) "unknown" layer and the yellow "dangerous" layer."""
+
+from __future__ import annotations
+
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+import viser
+
+from console.link.sim import SimConfig, SimRobot
+from console.session.mapping_job import GROUND_TRUTH_LABEL, MapperPerceiver, MappingJob, ground_truth_bundle_for
+from console.session.session import Session
+from console.views.grid_view import GridView
+from planner.grid import CellState, Closed
+
+
+@pytest.fixture()
+def server() -> viser.ViserServer:
+    srv = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
+    yield srv
+    srv.stop()
+
+
+@pytest.fixture()
+def captured(tmp_path: Path) -> Session:
+    robot = SimRobot(config=SimConfig(time_scale=4.0))
+    robot.connect()
+    session = Session(tmp_path / "s")
+    job = MappingJob(session, robot.capture, MapperPerceiver(GROUND_TRUTH_LABEL, ground_truth_bundle_for))
+    try:
+        assert job.run()
+        yield session
+    finally:
+        robot.close()
+
+
+def _wait_for(view: GridView, expected: dict[str, int], deadline_s: float = 30.0) -> dict[str, int]:
+    end = time.monotonic() + deadline_s
+    drawn = view.drawn_counts()
+    while time.monotonic() < end:
+        drawn = view.drawn_counts()
+        if all(drawn.get(k, 0) == v for k, v in expected.items()):
+            break
+        time.sleep(0.05)
+    return drawn
+
+
+def test_red_means_obstacles_not_unknown_space(server: viser.ViserServer, captured: Session) -> None:
+    grid = captured.grid
+    assert captured.known_space is not None and grid.reason is not None
+    reason = grid.reason
+    unknown = int(np.count_nonzero(reason == Closed.UNKNOWN))
+    obstacles = int(np.count_nonzero(np.isin(reason, [Closed.OBJECT, Closed.SURFACE, Closed.BENEATH])))
+    clearance = int(np.count_nonzero(reason == Closed.CLEARANCE))
+    dangerous = int(np.count_nonzero(grid.state == CellState.DANGEROUS))
+    occupied = int(np.count_nonzero(grid.state == CellState.OCCUPIED))
+    assert unknown > obstacles > 0 and clearance > 0  # the capture left most of the room unseen
+    assert occupied > obstacles + clearance
+
+    view = GridView(server, captured)  # the height slider starts at the top: every cell is drawn
+    assert view.visible_layers() == {"occupied": True, "dangerous": True, "free": True, "unknown": False}
+    drawn = _wait_for(view, {"occupied": obstacles, "dangerous": dangerous + clearance})
+    assert drawn["occupied"] == obstacles, drawn
+    assert drawn["dangerous"] == dangerous + clearance, drawn
+    assert "unknown" not in drawn  # off by default
+
+    view._checks["unknown"].value = True  # the toggle under Layers, as the browser sets it
+    drawn = _wait_for(view, {"unknown": unknown})
+    assert drawn["unknown"] == unknown and drawn["occupied"] == obstacles, drawn
+    handle = view._handles["unknown"]
+    assert handle.opacity is not None and handle.opacity < 0.5  # translucent grey
+
+    view._checks["occupied"].value = False
+    drawn = _wait_for(view, {"occupied": 0})
+    assert "occupied" not in drawn and drawn["unknown"] == unknown, drawn
