@@ -70,7 +70,7 @@ def attach_agent(app: Any) -> AgentDoor:
     cfg, session = app.config, app.session
     door = AgentDoor(session, commands=getattr(app, "commands", None), runner=app.runner, mapping=app.mapping,
                      robot_spec=cfg.robot, real_vehicle=getattr(cfg, "agent_real_vehicle", False),
-                     look=getattr(app, "look", None))
+                     look=getattr(app, "look", None), search=getattr(app, "search", None))
     app._closers.append(door.close)
     app.agent = door
     view = ApprovalView(app.server, session, door)

@@ -52,7 +52,8 @@ EVENTS_KEPT = 300
 READ_OPS = ("summary", "scene_graph", "scene_graph_schema", "objects", "robot_state", "mission_state", "mission_json",
             "scene_json", "last_photo", "recent_events", "proposals", "wait_proposal", "status", "unseen_space")
 SAFE_OPS = ("hold", "land_here", "return_to_launch")
-PROPOSAL_OPS = ("plan_to_point", "plan_to_object", "propose_capture_and_map", "propose_look_around", "propose_mission",
+PROPOSAL_OPS = ("plan_to_point", "plan_to_object", "propose_capture_and_map", "propose_look_around", "propose_search",
+                "propose_mission",
                 "withdraw_proposal")
 
 
@@ -107,6 +108,8 @@ class AgentDoor:
         runner: The mission runner (pause, abort, execute), or ``None``.
         mapping: The capture-and-map job (``start()``, ``running``), or ``None``.
         look: The Look around job (``look_around()``, ``running``, ``pause()``), or ``None``.
+        search: The Find job (:class:`console.session.search.SearchJob`: ``start(config)``, ``running``,
+            ``paused``, ``pause()``), or ``None``.
         robot_spec: The console's ``--robot`` (a real vehicle link turns proposals off unless ``real_vehicle``).
         real_vehicle: The console was started with ``--agent-real-vehicle``.
         queue: The approval queue (a new one by default).
@@ -114,8 +117,9 @@ class AgentDoor:
 
     def __init__(self, session: Any, commands: Any = None, runner: Any = None, mapping: Any = None,
                  robot_spec: str = "sim", real_vehicle: bool = False, queue: ProposalQueue | None = None,
-                 look: Any = None) -> None:
+                 look: Any = None, search: Any = None) -> None:
         self.session = session
+        self.search = search
         self.commands = commands
         self.runner = runner
         self.mapping = mapping
@@ -293,6 +297,9 @@ class AgentDoor:
         if run.state == "running" and self.runner is not None:
             self.runner.pause()  # the mission manager holds the robot
             msg = "the mission is paused: the robot holds where it is (the operator may Resume or Abort)"
+        elif self.search is not None and self.search.running and not self.search.paused:
+            self.search.pause()  # the move under way ends: the robot holds where it is
+            msg = "the search is paused: the robot holds where it is (the operator may Resume or Stop)"
         elif self.look is not None and self.look.running and not self.look.paused:
             self.look.pause()  # a turn under way stops; the look waits
             msg = "the look around is paused: the robot holds where it is (the operator may Resume or Stop)"
@@ -382,6 +389,30 @@ class AgentDoor:
             return "capture and map started"
 
         p = self.queue.propose("capture", "Capture & map: take a photo from where the robot is and map it", why, act)
+        return p.to_dict()
+
+    def _op_propose_search(self, args: Mapping[str, Any]) -> dict[str, Any]:
+        from console.session.search import SearchConfig, target_height
+
+        why = _text(args, "why", WHY_MAX, required=True)
+        target = _text(args, "target", NAME_MAX, required=True)
+        mode = _text(args, "mode", 16) or "auto"
+        captures = _number(args, "max_captures", 20.0)
+        if captures != int(captures):
+            raise AgentError(f"max_captures: must be a whole number, got {captures!r}")
+        try:
+            config = SearchConfig(target, mode=mode, max_captures=int(captures), target_height=target_height(target))
+        except SessionError as exc:
+            raise AgentError(str(exc)) from None
+        if self.search is None:
+            raise AgentError("this console has no search (Find)")
+
+        def act() -> str:
+            self.search.start(config)
+            return f"search for {target!r} started ({mode} mode, at most {config.max_captures} captures)"
+
+        p = self.queue.propose("search", f"Find {target!r}: choose viewpoints, move, capture and map until it is "
+                               f"found ({mode} mode, at most {config.max_captures} captures)", why, act)
         return p.to_dict()
 
     def _op_propose_look_around(self, args: Mapping[str, Any]) -> dict[str, Any]:

@@ -200,6 +200,15 @@ def build_server(bridge: Bridge, allow_actions: bool = False, decision_timeout: 
         each. Returns once decided (and, if approved, once the look has ended), with the outcome."""
         return await decided(await call("propose_look_around", {"why": why}), ctx)
 
+    @mcp.tool(annotations=acts, structured_output=False)
+    async def propose_search(target: str, why: str, ctx: Context, mode: str = "auto", max_captures: int = 20) -> str:
+        """Propose a search (Find) for ``target`` (a catalog class such as "robot dog"): the console picks
+        viewpoints, moves there, captures and maps until the target is found or the budget ends. Nothing
+        moves until the operator approves in the console. ``mode``: ``auto`` or ``step`` (the operator
+        approves each move); ``max_captures``: 1..200. Returns when the operator decides."""
+        return await decided(await call("propose_search", {"target": target, "why": why, "mode": mode,
+                                                           "max_captures": max_captures}), ctx)
+
     @mcp.tool(annotations=read_only, structured_output=False)
     async def wait_for_decision(proposal_id: str, ctx: Context) -> str:
         """Keep waiting for the operator's decision on a proposal that was still pending."""

@@ -34,7 +34,8 @@ BROWSER_ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--no-first-run",
 REPO = Path(__file__).resolve().parents[3]
 TOOLS = {"get_scene_summary", "get_scene_graph", "list_objects", "get_robot_state", "get_mission_state",
          "get_last_photo", "get_unseen_space", "get_recent_events", "hold", "land_here", "return_to_launch", "plan_to_point",
-         "plan_to_object", "propose_mission", "propose_capture_and_map", "propose_look_around", "wait_for_decision"}
+         "plan_to_object", "propose_mission", "propose_capture_and_map", "propose_look_around", "propose_search",
+         "wait_for_decision"}
 DEADLINE = 120.0  # [s] generous: the machine may be loaded
 SHOT = REPO / "docs" / "agent_panel.png"
 UPDATE_SHOT = os.environ.get("MORPHONAVI_UPDATE_SCREENSHOT") == "1"  # refresh docs/agent_panel.png
