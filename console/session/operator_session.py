@@ -102,7 +102,8 @@ class OperatorRules:
                        and run.active else None)
             if retired is None and run.active and self._running is not None and not self._running.command:
                 retired = rules.battery_blocker(robot)  # low battery: the operator's mission does not resume
-            return OperatorView(note, blocker, retired, rules.vehicle_commands(robot, run, ws, self._launch),
+            return OperatorView(note, blocker, retired,
+                                rules.vehicle_commands(robot, run, ws, self._launch, self._grid),  # type: ignore[attr-defined]
                                 rules.ends_in_air(self._mission, ws),  # type: ignore[attr-defined]
                                 self._running.command if self._running is not None and run.active else "",
                                 self._launch)
@@ -325,6 +326,10 @@ class OperatorRules:
                 raise SessionError("the mission does not end in the air: no landing to add")
             x, y, _ = route.last_node()
             spot = (float(x), float(y), ws.floor)
+            why = rules.unseen_floor_blocker(spot, self._grid)  # type: ignore[attr-defined]
+            if why is not None:
+                raise SessionError(f"cannot land below the last goal: the floor below {rules.fmt_point(spot[:2])} "
+                                   "has not been seen: look down there first")
             why = self._goal_problem_locked(spot)
             if why is not None:
                 raise SessionError(f"cannot land below the last goal: {why}")
@@ -338,14 +343,17 @@ class OperatorRules:
         self._emit([(ROUTE, None), (MISSION, None)])  # type: ignore[attr-defined]
         return mission
 
-    def land_mission(self) -> Mission:
-        """Land here as a one-segment mission (refused, with the reason, above a mapped obstacle)."""
+    def land_mission(self, forced: bool = False) -> Mission:
+        """Land here as a one-segment mission (refused, with the reason, above a mapped obstacle, and
+        over floor the known space has not seen free). ``forced`` (the critical-battery landing
+        only): land even on floor not seen (a forced landing beats a crash)."""
         with self._lock:  # type: ignore[attr-defined]
             r, ws = self._robot, self._workspace  # type: ignore[attr-defined]
-            state = rules.vehicle_commands(r, self._run, ws, self._launch)["land"]  # type: ignore[attr-defined]
+            grid = None if forced else self._grid  # type: ignore[attr-defined]
+            state = rules.vehicle_commands(r, self._run, ws, self._launch, grid)["land"]  # type: ignore[attr-defined]
             if not state.enabled or r is None:
                 raise SessionError(state.reason or "Land here applies when the robot is in the air")
-            why = rules.landing_blocker(r, self._grid)  # type: ignore[attr-defined]
+            why = rules.landing_blocker(r, self._grid, forced)  # type: ignore[attr-defined]
             if why is not None:
                 raise SessionError(f"cannot land here: {why}")
             return rules.land_here_mission(r, ws, f"land-{uuid.uuid4().hex[:6]}")

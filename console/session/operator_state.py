@@ -47,7 +47,7 @@ from typing import Sequence
 import numpy as np
 
 from pipeline.scene import Scene
-from planner.grid import CellState, CostWeights, PlanningGrid, Workspace
+from planner.grid import CellState, Closed, CostWeights, PlanningGrid, Workspace
 from planner.mission import Mission, MissionError, MissionSegment, SegmentKind, mission_from_cells, simplify
 
 from console.session import mission_rules
@@ -241,8 +241,11 @@ class CommandState:
 
 
 def vehicle_commands(robot: RobotSnapshot | None, run: RunStatus, ws: Workspace,
-                     launch: Vec3 | None) -> dict[str, CommandState]:
+                     launch: Vec3 | None, grid: PlanningGrid | None = None) -> dict[str, CommandState]:
     """Hold / Land here / Return / Disarm / Take control for the robot's state.
+
+    With ``grid`` (the session's planning grid), Land here is off over floor not seen free in the
+    known space (:func:`unseen_floor_blocker`); without it (or with no known space) it is not checked.
 
     While the vehicle flies a mode it chose itself (``robot.vehicle_control``: a failsafe's RTL or
     LAND, another ground station, RC), only *Take control* is on: the others would command it.
@@ -275,6 +278,8 @@ def vehicle_commands(robot: RobotSnapshot | None, run: RunStatus, ws: Workspace,
     nowhere = position_blocker(robot) or ""  # Land here and Return plan from the position
     if up:
         why = lost or nowhere or busy
+        if not why and grid is not None:
+            why = unseen_floor_blocker(robot.pose.translation, grid) or ""
         out["land"] = CommandState(True, not why, why)
     else:
         out["land"] = CommandState()
@@ -301,17 +306,58 @@ def vehicle_commands(robot: RobotSnapshot | None, run: RunStatus, ws: Workspace,
     return out
 
 
-def landing_blocker(robot: RobotSnapshot, grid: PlanningGrid) -> str | None:
-    """Why the robot cannot land straight down where it hovers (a mapped obstacle below), or ``None``."""
+def unseen_floor(point: Sequence[float], grid: PlanningGrid) -> bool:
+    """Whether any floor cell under the robot's footprint at ``point`` (world [m]; x, y used) is not
+    seen free in the known space: closed as :attr:`Closed.UNKNOWN` (unknown space closed) or marked
+    unseen (unknown space allowed). The footprint: the floor cells whose centre lies within
+    ``robot.radius`` of the point horizontally, and the cell holding it. ``False`` on a fully known grid."""
+    if grid.rule == "fully_known" or grid.reason is None:
+        return False
+    ws = grid.workspace
+    x, y = float(point[0]), float(point[1])
+    cell = ws.cell_of((x, y, ws.floor))
+    if cell is None:
+        return False
+    xs, ys, _ = ws.axes()
+    foot = np.hypot(xs[:, None] - x, ys[None, :] - y) <= grid.robot.radius + 1e-9
+    foot[cell[0], cell[1]] = True
+    bad = grid.reason[:, :, 0] == Closed.UNKNOWN
+    if grid.unseen is not None:
+        bad = bad | grid.unseen[:, :, 0]
+    return bool(np.any(bad & foot))
+
+
+def unseen_floor_blocker(point: Sequence[float], grid: PlanningGrid) -> str | None:
+    """Why the operator may not land at ``point`` (world [m]): the floor below has not been seen free
+    (:func:`unseen_floor`), or ``None``. The planner's rule for landing spots, for Land here."""
+    if not unseen_floor(point, grid):
+        return None
+    where = fmt_point((float(point[0]), float(point[1])))
+    return f"Land here is off: the floor below {where} has not been seen: look down there first, or Return"
+
+
+def landing_blocker(robot: RobotSnapshot, grid: PlanningGrid, forced: bool = False) -> str | None:
+    """Why the robot cannot land straight down where it hovers (a mapped obstacle below), or ``None``.
+
+    ``forced`` (the critical-battery landing): with known space, cells closed only because they
+    were not seen (:attr:`Closed.UNKNOWN`, or the clearance around such cells) do not stop it."""
     ws = grid.workspace
     x, y, z = (float(v) for v in robot.pose.translation)
     top = ws.cell_of((x, y, min(z, ws.max[2])))
     if top is None:
         return f"the robot at {fmt_point((x, y, z))} is outside the workspace"
+    known = grid.rule != "fully_known" and grid.reason is not None
     for k in range(top[2], -1, -1):
         cell = (top[0], top[1], k)
         if grid.state_at(cell) is CellState.OCCUPIED:
             owner = grid.owner_of(cell)
+            why = grid.reason_at(cell)
+            if known and (why is Closed.UNKNOWN or (why is Closed.CLEARANCE and owner is None)):
+                if forced:
+                    continue
+                if why is Closed.UNKNOWN:
+                    return (f"the space below the robot at {fmt_point((x, y))} has not been seen: "
+                            "look down there first, or Return")
             return (f"{owner or 'an obstacle'} is below the robot at {fmt_point((x, y))}: "
                     "use Return, or plan a goal on free floor")
     return None

@@ -55,7 +55,7 @@ class VehicleCommands:
             while self._session.run.active and time.monotonic() < end:
                 time.sleep(0.05)
         try:
-            msg = self.run("land")
+            msg = self.run("land", forced=True)  # lands even on floor not seen: a forced landing beats a crash
         except SessionError as exc:
             self._session.notify("Battery critical", f"cannot land here automatically: {exc}", "error")
             return
@@ -68,13 +68,16 @@ class VehicleCommands:
         if not state.enabled:
             raise SessionError(f"{LABELS[name]} is not possible now: {state.reason}")
 
-    def run(self, name: str) -> str:
+    def run(self, name: str, forced: bool = False) -> str:
         """Carry out command ``name`` (``hold``, ``land``, ``return``, ``disarm``); returns a message
         for the operator. Raises :class:`SessionError` with the reason when it does not apply or the
-        robot refuses."""
+        robot refuses. ``forced`` (the critical-battery landing only, with ``land``): land where the
+        robot is even on floor the known space has not seen (the session still checks the rest)."""
         if name not in LABELS:
             raise SessionError(f"unknown vehicle command {name!r}; expected one of {', '.join(LABELS)}")
-        self._check(name)
+        forced = forced and name == "land"
+        if not forced:
+            self._check(name)
         if name == "control":
             return self.take_control(confirm=True)
         try:
@@ -84,7 +87,7 @@ class VehicleCommands:
             if name == "disarm":
                 self._need(self._link, "robot link").disarm()
                 return "motors disarmed"
-            mission = self._session.land_mission() if name == "land" else self._session.return_mission()
+            mission = self._session.land_mission(forced) if name == "land" else self._session.return_mission()
             self._need(self._runner, "mission manager").execute(mission, command=LABELS[name])
         except SessionError:
             raise
