@@ -299,10 +299,11 @@ class Ranger:
         return rel, (f"sigma: depth map {rel:.0%} (spread {spread:.0%} against the other cues over "
                      f"{len(values)} reference objects)"), trusted
 
-    def _place_sigma(self, obj: MappedObject, scale: DepthScale | None, intr: Intrinsics, depth_rel: float) -> None:
-        """Depth cue, inverse-variance fusion (:func:`pipeline.ranging.fusion.fuse_cues`) and the centre."""
-        if obj.skipped:
-            return
+    def _depth_cue(self, obj: MappedObject, scale: DepthScale | None,
+                   intr: Intrinsics) -> tuple[float | None, tuple[float, float]]:
+        """The depth map's cue for ``obj``: sets ``obj.depth_z`` (camera-frame centre depth [m], side-cut
+        corrected) when the scaled depth of its region is usable; returns that surface depth [m] (or
+        ``None``) and the region's centre pixel ``(u, v)``."""
         surface = None
         if scale is not None and obj.depth_value is not None:
             z = scale.to_metric(obj.depth_value)
@@ -314,6 +315,14 @@ class Ranger:
             else:
                 obj.depth_z = float(centre_on_ray(uv, surface, self._half_depth(obj, surface, intr), intr)[2])
             obj.depth_z = self._side_cut_depth(obj, scale, obj.depth_z)
+        return surface, uv
+
+    def _place_sigma(self, obj: MappedObject, scale: DepthScale | None, intr: Intrinsics, depth_rel: float) -> None:
+        """Depth cue, inverse-variance fusion (:func:`pipeline.ranging.fusion.fuse_cues`) and the centre."""
+        if obj.skipped:
+            return
+        surface, uv = self._depth_cue(obj, scale, intr)
+        if surface is not None:
             # the map sees the near surface: the centre is half a footprint of unknown yaw behind it
             if obj.size_known:
                 offset_sd = half_depth_stats(obj.size, obj.spread)[1]
@@ -407,18 +416,7 @@ class Ranger:
         if obj.skipped:
             return
         x1, y1, x2, y2 = obj.detection.box
-        surface = None
-        if scale is not None and obj.depth_value is not None:
-            z = scale.to_metric(obj.depth_value)
-            surface = float(z) if math.isfinite(float(z)) and float(z) > 0 else None
-        uv = region_centre(obj.mask, obj.detection.box)
-        if surface is not None:
-            if obj.geometric is not None:
-                obj.depth_z = surface + obj.geometric.surface_offset
-            else:
-                half = self._half_depth(obj, surface, intr)
-                obj.depth_z = float(centre_on_ray(uv, surface, half, intr)[2])
-            obj.depth_z = self._side_cut_depth(obj, scale, obj.depth_z)
+        surface, uv = self._depth_cue(obj, scale, intr)
         obj.fused = fuse_distances(obj.geometric_z, obj.depth_z, *weights)
         if obj.fused is None:
             obj.skipped = "no distance: unknown size (or every dimension cut) and no metric depth"
