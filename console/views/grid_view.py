@@ -7,16 +7,18 @@ one batched mesh so tens of thousands of cells stay fluid, sorted by why a cell 
 - occupied (red): obstacles only: inside a mapped object, a depth surface an object explains, or
   under a floating object (unlabelled obstacles are drawn magenta by the known-space view);
 - dangerous (yellow): the robot's clearance around an obstacle (closed) and the dearer band beyond it;
-- free (blue);
-- unknown (translucent grey, off by default): cells closed only because no capture has seen them.
+- free (blue, off by default: one click under Layers shows it);
+- unknown (translucent grey, off by default): cells closed only because no capture has seen them,
+  and the clearance and band around unseen space (not around an obstacle).
 
- Free cells are drawn on the goal layer only (the floor, or the chosen goal
+Free cells are drawn on the goal layer only (the floor, or the chosen goal
 altitude): that is the layer a click puts a goal on, and a full 3D lattice of free cells would
 hide everything else. All positions are world frame (z up) [m].
 """
 
 from __future__ import annotations
 
+import math
 import threading
 from typing import Any
 
@@ -24,7 +26,9 @@ import numpy as np
 import trimesh
 import viser
 
-from planner.grid import CellState, Closed, PlanningGrid
+from planner.cspace import dilate, object_distances
+from planner.grid import DANGER_BAND, CellState, Closed, PlanningGrid
+from planner.robot_model import RobotModel
 
 from console.session.session import GRID, SETTINGS, Session
 
@@ -45,25 +49,50 @@ _LAYERS: tuple[tuple[str, CellState, tuple[int, int, int], float, float], ...] =
 )
 
 
+def near_obstacles(grid: PlanningGrid) -> np.ndarray:
+    """Boolean ``[nx, ny, nz]``: cells within the robot's reach (radius plus :data:`DANGER_BAND`) of
+    an obstacle: a mapped object's box or an obstacle cell (:data:`OBSTACLE_REASONS`, unlabelled);
+    unseen space is no obstacle here. The same reach as :func:`planner.grid.build_grid` uses: spheres
+    of the flying radius in the air, the walking cylinder (radius, up to the body height) on the ground."""
+    ws = grid.workspace
+    reason = grid.reason
+    rb = grid.robot if grid.robot is not None else RobotModel.with_radius(float(grid.margin))
+    res = ws.resolution
+    cells = np.isin(reason, [int(r) for r in OBSTACLE_REASONS + (Closed.UNLABELLED,)])
+    reach_f, reach_w = rb.flying_radius + DANGER_BAND, rb.radius + DANGER_BAND
+    d3, _ = object_distances(grid.objects, ws.axes(), reach_f)
+    near = (d3 <= reach_f + 1e-9) | dilate(cells, reach_f, res)
+    kh = max(1, min(ws.shape[2], int(math.ceil(rb.height / res - 1e-9))))
+    d2, _ = object_distances(grid.objects, ws.axes(), reach_w, z_band=(ws.floor, ws.floor + rb.height))
+    near[:, :, 0] = (d2 <= reach_w + 1e-9) | dilate(cells[:, :, :kh].any(axis=2), reach_w, res)
+    return near
+
+
 def layer_mask(grid: PlanningGrid, name: str) -> np.ndarray:
     """Boolean ``[nx, ny, nz]`` of the cells the layer ``name`` draws.
 
     ``occupied``: obstacle cells (:data:`OBSTACLE_REASONS`; every occupied cell on a grid without
-    reasons); ``dangerous``: dangerous cells and closed clearance cells (:attr:`Closed.CLEARANCE`);
-    ``free``: free cells; ``unknown``: cells closed only because they were not seen (:attr:`Closed.UNKNOWN`).
+    reasons); ``dangerous``: dangerous cells and closed clearance cells (:attr:`Closed.CLEARANCE`)
+    near an obstacle (:func:`near_obstacles`); ``free``: free cells; ``unknown``: cells closed only
+    because they were not seen (:attr:`Closed.UNKNOWN`), and the dangerous and clearance cells that
+    only unseen space makes so (no obstacle near).
     """
     reason = grid.reason
     if name == "free":
         return grid.state == CellState.FREE
-    if name == "dangerous":
-        mask = grid.state == CellState.DANGEROUS
-        return mask if reason is None else mask | (reason == Closed.CLEARANCE)
+    if name in ("dangerous", "unknown"):
+        banded = grid.state == CellState.DANGEROUS
+        if reason is None:
+            return banded if name == "dangerous" else np.zeros(grid.state.shape, bool)
+        banded |= reason == Closed.CLEARANCE
+        near = near_obstacles(grid)
+        if name == "dangerous":
+            return banded & near
+        return (reason == Closed.UNKNOWN) | (banded & ~near)
     if name == "occupied":
         if reason is None:
             return grid.state == CellState.OCCUPIED
         return np.isin(reason, [int(r) for r in OBSTACLE_REASONS])
-    if name == "unknown":
-        return np.zeros(grid.state.shape, bool) if reason is None else reason == Closed.UNKNOWN
     raise ValueError(f"layer: must be one of occupied, dangerous, free, unknown, not {name!r}")
 
 
@@ -88,6 +117,12 @@ def layer_cells(grid: PlanningGrid, state: CellState | np.ndarray, max_height: f
     return ws.centers(idx)
 
 
+def hidden_hint(hidden: list[str]) -> str:
+    """How to show the hidden layers ``hidden`` (names of :data:`_LAYERS`), in words."""
+    boxes = " / ".join(f"<i>{name.capitalize()} cells</i>" for name in hidden)
+    return f"tick {boxes} under Layers"
+
+
 class GridView:
     """Floor, bounds and the occupied / dangerous / free cell layers.
 
@@ -104,14 +139,16 @@ class GridView:
         self._handles: dict[str, Any] = {}
         ws = session.workspace
         self._checks: dict[str, viser.GuiCheckboxHandle] = {}
-        defaults = {"occupied": True, "dangerous": True, "free": True, "unknown": False}
+        defaults = {"occupied": True, "dangerous": True, "free": False, "unknown": False}
         hints = {
             "occupied": "Obstacle cells: inside a mapped object or a surface the depth saw; impassable (red). "
                         "Unlabelled obstacles are the magenta layer",
             "dangerous": "Cells within the robot's radius of an obstacle (impassable) or its margin beyond "
                          "(high cost) (yellow)",
-            "free": "Free cells of the goal layer (the floor, or the goal altitude): where a click puts a goal",
-            "unknown": "Cells closed only because no capture has seen them yet (translucent grey). Off by default",
+            "free": "Free cells of the goal layer (the floor, or the goal altitude): where a click puts a goal "
+                    "(blue). Off by default",
+            "unknown": "Cells closed only because no capture has seen them yet, and the clearance around them "
+                       "(translucent grey). Off by default",
         }
         self._counts = server.gui.add_markdown("")
         with server.gui.add_folder("Layers", expand_by_default=False) as folder:
@@ -197,12 +234,14 @@ class GridView:
                     flat_shading=True,
                 )
                 self._handles[name] = handle
+            hidden = [name for name in ("free", "unknown") if not self._checks[name].value]
             self._counts.content = (
                 f"<small>Grid {ws.shape[0]}×{ws.shape[1]}×{ws.shape[2]} at {ws.resolution:g} m: "
                 f"<b style='color:rgb{OCCUPIED_RGB}'>{int(masks['occupied'].sum())}</b> occupied · "
                 f"<b style='color:rgb{(180, 140, 0)}'>{int(masks['dangerous'].sum())}</b> dangerous · "
                 f"<b style='color:rgb{FREE_RGB}'>{counts['free']}</b> free · "
-                f"<b style='color:rgb{(110, 110, 115)}'>{int(masks['unknown'].sum())}</b> unknown</small>"
+                f"<b style='color:rgb{(110, 110, 115)}'>{int(masks['unknown'].sum())}</b> unknown"
+                + (f" ({' and '.join(hidden)} not drawn: {hidden_hint(hidden)})" if hidden else "") + "</small>"
             )
 
     def drawn_counts(self) -> dict[str, int]:

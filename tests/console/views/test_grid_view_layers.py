@@ -1,6 +1,8 @@
 """The grid layers without a browser: after a capture with known space the red "occupied" layer
 draws the obstacle cells only, not the cells closed because they are unknown or within the robot's
-clearance; those go to the (off by default) "unknown" layer and the yellow "dangerous" layer."""
+clearance; those go to the (off by default) "unknown" layer and the yellow "dangerous" layer (the
+band around obstacles; the band around unseen space goes with the unknown layer). Free cells are off
+by default and one toggle shows them."""
 
 from __future__ import annotations
 
@@ -14,7 +16,7 @@ import viser
 from console.link.sim import SimConfig, SimRobot
 from console.session.mapping_job import GROUND_TRUTH_LABEL, MapperPerceiver, MappingJob, ground_truth_bundle_for
 from console.session.session import Session
-from console.views.grid_view import GridView
+from console.views.grid_view import GridView, near_obstacles
 from planner.grid import CellState, Closed
 
 
@@ -61,19 +63,34 @@ def test_red_means_obstacles_not_unknown_space(server: viser.ViserServer, captur
     assert unknown > obstacles > 0 and clearance > 0  # the capture left most of the room unseen
     assert occupied > obstacles + clearance
 
+    # yellow is the band around obstacles; the band that only unseen space makes goes with the grey layer
+    near = near_obstacles(grid)
+    banded = (grid.state == CellState.DANGEROUS) | (reason == Closed.CLEARANCE)
+    around_unseen = int(np.count_nonzero(banded & ~near))
+    assert around_unseen > 0 and int(np.count_nonzero(banded & near)) > 0
+    assert around_unseen + int(np.count_nonzero(banded & near)) == dangerous + clearance
+
     view = GridView(server, captured)  # the height slider starts at the top: every cell is drawn
-    assert view.visible_layers() == {"occupied": True, "dangerous": True, "free": True, "unknown": False}
-    drawn = _wait_for(view, {"occupied": obstacles, "dangerous": dangerous + clearance})
+    assert view.visible_layers() == {"occupied": True, "dangerous": True, "free": False, "unknown": False}
+    drawn = _wait_for(view, {"occupied": obstacles, "dangerous": dangerous + clearance - around_unseen})
     assert drawn["occupied"] == obstacles, drawn
-    assert drawn["dangerous"] == dangerous + clearance, drawn
-    assert "unknown" not in drawn  # off by default
+    assert drawn["dangerous"] == dangerous + clearance - around_unseen, drawn
+    assert "unknown" not in drawn and "free" not in drawn  # off by default
+    assert "free and unknown not drawn: tick <i>Free cells</i> / <i>Unknown cells</i> under Layers" \
+        in view._counts.content  # the counts line says how to show them
 
     view._checks["unknown"].value = True  # the toggle under Layers, as the browser sets it
-    drawn = _wait_for(view, {"unknown": unknown})
-    assert drawn["unknown"] == unknown and drawn["occupied"] == obstacles, drawn
+    drawn = _wait_for(view, {"unknown": unknown + around_unseen})
+    assert drawn["unknown"] == unknown + around_unseen and drawn["occupied"] == obstacles, drawn
     handle = view._handles["unknown"]
     assert handle.opacity is not None and handle.opacity < 0.5  # translucent grey
 
     view._checks["occupied"].value = False
     drawn = _wait_for(view, {"occupied": 0})
-    assert "occupied" not in drawn and drawn["unknown"] == unknown, drawn
+    assert "occupied" not in drawn and drawn["unknown"] == unknown + around_unseen, drawn
+
+    view._checks["free"].value = True  # one click shows the free cells of the goal layer
+    free_floor = int(np.count_nonzero(grid.state[:, :, 0] == CellState.FREE))
+    drawn = _wait_for(view, {"free": free_floor})
+    assert free_floor > 0 and drawn["free"] == free_floor, drawn
+    assert "free and" not in view._counts.content
