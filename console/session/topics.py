@@ -20,5 +20,6 @@ SELECTION = "selection"  # selected object changed [str | None]
 SETTINGS = "settings"  # goal mode / altitude / layers changed [None]
 NOTICE = "notice"  # message for every operator [Notice]
 AGENT = "agent"  # a language-model agent's tool call, proposal or the operator's decision (console.mcp) [dict]
+SEARCH = "search"  # a search step or its end (console.session.search_report) [dict]
 
 Listener = Callable[[str, Any], None]
