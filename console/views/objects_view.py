@@ -27,6 +27,7 @@ from pipeline.scene import SceneObject
 
 from console.views.client_notice import tell
 from console.views.object_history import history_lines
+from console.views.object_labels import ClientLabels, LabelSpot
 from console.views.picking import SELECT_MODIFIER, click_intent
 from console.session.session import CAPTURE, SCENE, SELECTION, Session, SessionError
 from console.wording import natural_sorted, plural
@@ -187,14 +188,17 @@ class ObjectsView:
         self._models = ProxyModels()
         self._lock = threading.RLock()
         self._drawn: dict[str, tuple[SceneObject, list[Any]]] = {}
-        self._labels: list[Any] = []
         self._on_node_click = on_node_click
+        hint = ("Labels above the objects, as many as fit without overlapping (the selected object's first, "
+                "then the nearest); zoom in for more")
         if layers is not None:
             with layers:
-                self._show_labels = server.gui.add_checkbox("Object labels", True, hint="Show a label above every object")
+                self._show_labels = server.gui.add_checkbox("Object labels", True, hint=hint)
         else:
-            self._show_labels = server.gui.add_checkbox("Object labels", True, hint="Show a label above every object")
-        self._show_labels.on_update(lambda _e: self._apply_label_visibility())
+            self._show_labels = server.gui.add_checkbox("Object labels", True, hint=hint)
+        self.labels = ClientLabels(server, lambda: getattr(self._session.selected, "id", None), self._robot_label)
+        """The object labels of every tab, decluttered per tab (:mod:`console.views.object_labels`)."""
+        self._show_labels.on_update(lambda _e: self.labels.set_enabled(bool(self._show_labels.value)))
         self._summary = server.gui.add_markdown("")
         self._chooser = server.gui.add_dropdown("Select object", (NONE_CHOICE,), hint="Or click an object in the 3D view")
         self._chooser.on_update(self._on_choose)
@@ -230,6 +234,7 @@ class ObjectsView:
             self.redraw()
         elif topic == SELECTION:
             self._show_selection()
+            self.labels.refresh_all()  # the selected object's label first
 
     def _add(self, obj: SceneObject) -> list[Any]:
         key = _node_key(obj.id)
@@ -277,13 +282,7 @@ class ObjectsView:
             for oid, obj in current.items():
                 if oid not in self._drawn:
                     self._drawn[oid] = (obj, self._add(obj))
-            for h in self._labels:
-                h.remove()
-            self._labels = [
-                self._server.scene.add_label(f"/labels/{n}", text, position=pos, anchor="bottom-center",
-                                             font_screen_scale=0.8, visible=bool(self._show_labels.value))
-                for n, (text, pos, _) in enumerate(label_groups(scene.objects))
-            ]
+            self.labels.set_spots([LabelSpot(text, pos, tuple(ids)) for text, pos, ids in label_groups(scene.objects)])
             ws = self._session.workspace
             outside = [o for o in scene.objects if not ws.contains(o.position)]
             self._summary.content = (
@@ -295,10 +294,13 @@ class ObjectsView:
                 self._chooser.options = options
         self._show_selection()
 
-    def _apply_label_visibility(self) -> None:
-        with self._lock:
-            for h in self._labels:
-                h.visible = bool(self._show_labels.value)
+    def _robot_label(self) -> list[tuple[str, tuple[float, float, float]]]:
+        """The robot's label (text and anchor, world [m]) that object labels leave free."""
+        robot = self._session.robot
+        if robot is None:
+            return []
+        x, y, z = (float(v) for v in robot.pose.translation)
+        return [("robot · walking", (x, y, z + 0.55))]
 
     def _show_selection(self) -> None:
         with self._lock:

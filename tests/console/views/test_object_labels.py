@@ -1,0 +1,89 @@
+"""Object labels without a browser: a crowded room's labels are chosen so that none overlap, the
+selected object's label always shows, zooming in shows more, and every tab chooses for its own view."""
+
+from __future__ import annotations
+
+import itertools
+import math
+from dataclasses import dataclass
+
+import numpy as np
+import pytest
+
+from console.views.object_labels import MAX_LABELS, LabelSpot, choose, declutter, label_rect, overlaps, project
+
+
+@dataclass
+class Cam:
+    """A viser-like camera (world <- camera, OpenCV optical frame) looking from ``eye`` at ``target``."""
+
+    position: np.ndarray
+    wxyz: np.ndarray
+    fov: float = 1.0
+    image_width: int = 900
+    image_height: int = 700
+
+
+def look(eye: tuple[float, float, float], target: tuple[float, float, float], **kw: float) -> Cam:
+    from scipy.spatial.transform import Rotation
+
+    e, t = np.asarray(eye, float), np.asarray(target, float)
+    z = (t - e) / np.linalg.norm(t - e)
+    x = np.cross(z, (0.0, 0.0, 1.0))
+    x /= np.linalg.norm(x)
+    y = np.cross(z, x)
+    q = Rotation.from_matrix(np.column_stack([x, y, z])).as_quat()  # x, y, z, w
+    return Cam(e, np.array([q[3], q[0], q[1], q[2]]), **kw)  # type: ignore[arg-type]
+
+
+def crowd() -> list[LabelSpot]:
+    """Twenty labels on a 1 m x 0.6 m patch: far more than fit side by side from across the room."""
+    names = ["office chair", "desk", "suitcase", "cardboard box ×3", "office cabinet"]
+    return [LabelSpot(names[n % 5], (2.0 + 0.25 * (n % 4), 4.0 + 0.12 * (n // 4), 0.8), (f"o{n}",)) for n in range(20)]
+
+
+def test_projection_puts_the_look_at_point_in_the_middle() -> None:
+    cam = look((2.5, -2.0, 4.0), (2.5, 4.0, 0.0))
+    u, v, depth = project(cam.wxyz, cam.position, cam.fov, cam.image_width, cam.image_height, (2.5, 4.0, 0.0))
+    assert (u, v) == pytest.approx((450, 350), abs=1e-6) and depth == pytest.approx(math.dist(cam.position, (2.5, 4, 0)))
+    above = project(cam.wxyz, cam.position, cam.fov, cam.image_width, cam.image_height, (2.5, 4.0, 1.0))
+    assert above[1] < v  # higher in the world is higher in the picture (y down)
+    assert project(cam.wxyz, cam.position, cam.fov, 900, 700, (2.5, -5.0, 4.0)) is None  # behind the camera
+
+
+def test_declutter_keeps_no_two_overlapping_boxes() -> None:
+    rects = [(0, 0, 50, 10), (40, 5, 90, 15), (100, 0, 150, 10), (0, 0, 10, 10)]
+    assert declutter(rects, [0, 1, 2, 3]) == [0, 2]
+    assert declutter(rects, [1, 0, 2, 3]) == [1, 2, 3]  # the first in the order wins
+    assert declutter(rects, [0, 1, 2, 3], reserved=[(95, 0, 160, 12)]) == [0]  # the robot's label is left free
+    assert declutter(rects, [0, 2], limit=1) == [0]
+
+
+def test_a_crowded_room_shows_labels_that_do_not_overlap() -> None:
+    spots = crowd()
+    far = look((2.5, -3.0, 4.0), (2.4, 4.2, 0.5))
+    shown = choose(spots, far)
+    assert 1 <= len(shown) < len(spots)  # some are left out, some shown
+    for (_, a), (_, b) in itertools.combinations(shown, 2):
+        assert not overlaps(a, b, gap=0.0), (a, b)
+    # closer, the same objects spread over more pixels: more labels fit
+    near = look((2.4, 2.6, 1.3), (2.4, 4.2, 0.8))
+    assert len(choose(spots, near)) > len(shown)
+    assert len(choose(spots, near)) <= MAX_LABELS
+
+
+def test_the_selected_objects_label_always_shows_and_labels_leave_the_robots_free() -> None:
+    spots = crowd()
+    cam = look((2.5, -3.0, 4.0), (2.4, 4.2, 0.5))
+    hidden = next(s for i, s in enumerate(spots) if i not in {j for j, _ in choose(spots, cam)})
+    shown = choose(spots, cam, selected=hidden.ids[0])
+    assert spots[shown[0][0]] is hidden  # first, whatever the crowd
+    robot = ("robot · walking", spots[0].position)
+    kept = choose(spots, cam, reserved_spots=[robot])
+    u, v, _ = project(cam.wxyz, cam.position, cam.fov, cam.image_width, cam.image_height, robot[1])
+    box = label_rect(robot[0], u, v)
+    assert all(not overlaps(r, box, gap=0.0) for _, r in kept)
+
+
+def test_a_tab_without_a_camera_yet_shows_none() -> None:
+    assert choose(crowd(), Cam(np.zeros(3), np.array([1.0, 0, 0, 0]), 0.0, 0, 0)) == []
