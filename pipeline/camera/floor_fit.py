@@ -115,7 +115,11 @@ class DepthPlane:
         inlier_share: Their share of the sampled lower-image points.
         sigma_angle: 1-sigma of the normal's direction [rad] (inlier spread, with a floor for the depth
             model's own distortion, :data:`MIN_PLANE_ANGLE_SIGMA`).
-        sigma_log_height: 1-sigma of ``ln`` height (the depth scale's uncertainty dominates).
+        sigma_log_height: 1-sigma of ``ln`` of the support point's height over the plane (the depth
+            scale's uncertainty dominates).
+        support_point: The inliers' centroid [m] (camera frame): the height is measured there, so a
+            tilted candidate floor meets it lower or higher (the plane's pitch and height errors are
+            correlated through it, not independent).
     """
 
     gravity_cam: tuple[float, float, float]
@@ -124,6 +128,7 @@ class DepthPlane:
     inlier_share: float
     sigma_angle: float
     sigma_log_height: float
+    support_point: tuple[float, float, float] = (0.0, 0.0, 0.0)
 
 
 @dataclass(frozen=True)
@@ -188,6 +193,15 @@ MIN_PLANE_ANGLE_SIGMA = math.radians(2.0)
 normal is known at best to 2 deg, however many points it has."""
 MIN_PLANE_LOG_HEIGHT_SIGMA = 0.1
 """The plane's height is in the depth map's scale, fitted from the objects: at best 10 %."""
+NORMAL_MAX_TILT_DEG = 60.0
+"""A depth point whose surface normal (from its lattice neighbours) is tilted more than this from the
+prior gravity is on a wall or an object's face, not a floor candidate (wide: a learned map's noise
+tilts a floor's local normals by tens of degrees; a wall is at 90)."""
+PLANE_MIN_TOL = 0.005
+PLANE_MIN_TOL_REL = 0.005
+"""The depth map's noise floor: a point ``|X|`` metres away is within ``0.5 cm + 0.5 % |X|`` of its
+surface at best (a simulator's render; a learned map's own spread re-selects wider, up to the RANSAC
+tolerance)."""
 
 
 def _rotate(g0: np.ndarray, pitch: float, roll: float) -> np.ndarray:
@@ -212,10 +226,13 @@ def plane_from_depth(depth_m: np.ndarray, intr: Intrinsics, prior_gravity: Seque
 
     Points on a ``grid`` x ``grid`` lattice of the image's lower half (below the principal point),
     outside ``exclude`` (H x W bool: the detected objects' boxes), are back-projected. RANSAC (fixed
-    ``seed``: the same photo gives the same plane) keeps the plane with most inliers (``|n . X - h| <=
-    tol_rel * |X| + 2 cm``) whose normal lies within ``max_tilt_deg`` of ``prior_gravity`` and which
-    passes below the camera; it is refitted to its inliers (least squares, SVD). ``None`` with fewer
-    than 30 valid points, fewer than 25 inliers or inliers under 20 % of the points.
+    ``seed``: the same photo gives the same plane) keeps the plane of least truncated squared residual
+    (MSAC, tolerance ``tol_rel * |X| + 2 cm``) whose normal lies within ``max_tilt_deg`` of
+    ``prior_gravity`` and which passes below the camera; it is refitted to its inliers (least squares,
+    SVD), re-selected within three robust residual scales (never tighter than the map's noise floor,
+    :data:`PLANE_MIN_TOL`, nor wider than the tolerance). Its sigmas come from how well the inliers pin
+    it down (the residual RMS over the support's extent: a narrow strip of floor is uncertain). ``None``
+    with fewer than 30 valid points, fewer than 25 inliers or inliers under 20 % of the points.
     """
     d = np.asarray(depth_m, dtype=np.float64)
     if d.ndim != 2:
@@ -229,9 +246,16 @@ def plane_from_depth(depth_m: np.ndarray, intr: Intrinsics, prior_gravity: Seque
     us = np.linspace(0.02 * w, 0.98 * w, grid).astype(int)
     vs = np.linspace(v0, h - 2, max(grid // 2, 8)).astype(int)
     uu, vv = np.meshgrid(us, vs)
-    uu, vv = uu.ravel(), vv.ravel()
     z = d[vv, uu]
     ok = np.isfinite(z) & (z > 0)
+    # the surface's own normal on the lattice (central differences of the back-projected points): a
+    # wall or a box's face is no floor, however close to the floor its foot lies
+    lattice = _rays(np.stack([uu.ravel(), vv.ravel()], axis=1), intr).reshape(*uu.shape, 3) * np.where(
+        ok, z, np.nan)[..., None]
+    normal = np.cross(np.gradient(lattice, axis=1), np.gradient(lattice, axis=0))
+    cos_n = np.abs(normal @ g0) / np.maximum(np.linalg.norm(normal, axis=-1), 1e-12)
+    ok &= ~(cos_n < math.cos(math.radians(NORMAL_MAX_TILT_DEG)))  # NaN normals (a lattice edge) stay
+    uu, vv, z, ok = uu.ravel(), vv.ravel(), z.ravel(), ok.ravel()
     if exclude is not None:
         ok &= ~np.asarray(exclude, dtype=bool)[vv, uu]
     if int(ok.sum()) < 30:
@@ -239,9 +263,11 @@ def plane_from_depth(depth_m: np.ndarray, intr: Intrinsics, prior_gravity: Seque
     pts = _rays(np.stack([uu[ok], vv[ok]], axis=1), intr) * z[ok, None]
     n_pts = len(pts)
     rng = np.random.default_rng(seed)
-    tol = tol_rel * np.linalg.norm(pts, axis=1) + 0.02
+    dist = np.linalg.norm(pts, axis=1)
+    tol = tol_rel * dist + 0.02
+    tight = PLANE_MIN_TOL_REL * dist + PLANE_MIN_TOL
     cos_max = math.cos(math.radians(max_tilt_deg))
-    best: tuple[int, np.ndarray] | None = None
+    best: tuple[float, np.ndarray] | None = None
     for _ in range(iterations):
         a, b, c = pts[rng.choice(n_pts, 3, replace=False)]
         n = np.cross(b - a, c - a)
@@ -256,14 +282,16 @@ def plane_from_depth(depth_m: np.ndarray, intr: Intrinsics, prior_gravity: Seque
         hh = float(n @ a)
         if hh <= 0:
             continue
-        inl = np.abs(pts @ n - hh) <= tol
-        cnt = int(inl.sum())
-        if best is None or cnt > best[0]:
-            best = (cnt, inl)
-    if best is None or best[0] < 25 or best[0] < 0.2 * n_pts:
+        # MSAC: the truncated squared residual, so the plane the points lie ON beats a tilted one that
+        # merely keeps the floor and a wall's foot within the tolerance band
+        r2 = np.minimum((pts @ n - hh) ** 2, tol**2) / tol**2
+        cost = float(r2.sum())
+        if best is None or cost < best[0]:
+            best = (cost, np.abs(pts @ n - hh) <= tol)
+    if best is None or int(best[1].sum()) < 25 or int(best[1].sum()) < 0.2 * n_pts:
         return None
     inl = best[1]
-    for _ in range(2):  # refit on the inliers, then re-select them once
+    for _ in range(3):  # refit on the inliers, then re-select them within the map's own noise
         q = pts[inl]
         c = q.mean(axis=0)
         _, s, vt = np.linalg.svd(q - c, full_matrices=False)
@@ -271,17 +299,30 @@ def plane_from_depth(depth_m: np.ndarray, intr: Intrinsics, prior_gravity: Seque
         hh = float(n @ c)
         if hh <= 0 or float(n @ g0) < cos_max:
             return None
-        inl = np.abs(pts @ n - hh) <= tol
+        res = pts @ n - hh
+        scale = 1.4826 * float(np.median(np.abs(res[inl])))  # robust residual scale of the inliers
+        inl = np.abs(res) <= np.clip(3.0 * scale, tight, tol)
         if int(inl.sum()) < 25:
             return None
     q = pts[inl]
+    c = q.mean(axis=0)
+    _, s, vt = np.linalg.svd(q - c, full_matrices=False)
+    n = vt[2] if float(vt[2] @ g0) > 0 else -vt[2]
+    hh = float(n @ c)
+    if hh <= 0 or float(n @ g0) < cos_max:
+        return None
     res = q @ n - hh
-    spread = float(np.sqrt(np.mean(res**2)))
-    # the normal's tilt error: residual spread over the points' spread along the plane's shorter axis
-    # (s[1] = sqrt(N) x that RMS extent), never below what a depth model's warped floor allows
-    angle = max(math.atan2(spread, max(float(s[1]), 1e-9)), MIN_PLANE_ANGLE_SIGMA)
+    # how well the points pin the plane down: their residuals (a depth model's warp, a wall's foot, the
+    # map's noise floor) are systematic, not independent, so they tilt the plane by about their RMS over
+    # the support's RMS extent along its shorter axis (s[1] / sqrt(N)); a narrow strip of floor (a wall
+    # or a stack of boxes close ahead) thus widens its own sigma, however many points it has
+    spread = max(float(np.sqrt(np.mean(res**2))), 0.5 * float(np.mean(tight[inl])))
+    extent = max(float(s[1]) / math.sqrt(len(q)), 1e-6)
+    angle = max(math.atan2(spread, extent), MIN_PLANE_ANGLE_SIGMA)
+    # the height is known where the points are (their centroid); the fit extrapolates it to the camera
+    # along its own candidate floor, so a tilt error does not pass for a height error
     return DepthPlane(tuple(float(v) for v in n), hh, int(inl.sum()), float(inl.mean()), angle,  # type: ignore[arg-type]
-                      MIN_PLANE_LOG_HEIGHT_SIGMA)
+                      math.hypot(MIN_PLANE_LOG_HEIGHT_SIGMA, spread / hh), tuple(float(v) for v in c))  # type: ignore[arg-type]
 
 
 def _angles_of(g: np.ndarray, g0: np.ndarray) -> tuple[float, float]:
@@ -316,8 +357,11 @@ def fit_floor(prior: FloorPrior, contacts: Sequence[Contact], intr: Intrinsics,
         out = [pitch / prior.sigma_pitch, roll / prior.sigma_roll, (lh - lh0) / prior.sigma_log_height,
                common / COMMON_SIZE_SIGMA]
         if plane is not None and plane_ang is not None:
+            # the plane's height where its points are: the candidate floor's distance below them
+            below = float(np.asarray(plane.support_point) @ _rotate(g0, pitch, roll))
+            h_support = plane.camera_height if not any(plane.support_point) else max(below, 1e-3)
             out += [(pitch - plane_ang[0]) / plane.sigma_angle, (roll - plane_ang[1]) / plane.sigma_angle,
-                    (lh - math.log(plane.camera_height)) / plane.sigma_log_height]
+                    (lh - math.log(h_support)) / plane.sigma_log_height]
         if len(use):
             g = _rotate(g0, pitch, roll)
             gr = np.maximum(rays @ g, 1e-3)

@@ -30,6 +30,7 @@ from pipeline.camera.floor_fit import (
 )
 from pipeline.camera.geometry import Intrinsics
 from pipeline.ranging.ground_contact import GroundModel
+from pipeline.ranging.occlusion import bottom_occluders
 from pipeline.ranging.size_prior import half_depth_stats
 
 DISAGREE_SIGMAS = 3.4
@@ -70,12 +71,19 @@ def contacts_of(objects: Sequence[object]) -> tuple[list[Contact], list[int]]:
     a floor-standing class of known size whose box bottom the border does not cut and that have a
     size-prior cue; the contact depth is the size prior's centre depth less the half footprint, its
     relative sigma the size prior's and the footprint's over ``sqrt(score)``.
+    A box whose bottom edge a nearer detection may hide (:func:`pipeline.ranging.occlusion.bottom_occluders`)
+    gives no contact: its visible bottom is not where it meets the floor (a desk behind a compressor).
     Returns the contacts and the objects' indices."""
     out: list[Contact] = []
     idx: list[int] = []
+    live = [i for i, o in enumerate(objects) if not o.skipped]  # type: ignore[attr-defined]
+    occluded = {i for i, occ in zip(live, bottom_occluders([objects[i].detection.box for i in live]))  # type: ignore[attr-defined]
+                if occ is not None}
     for i, o in enumerate(objects):
         sp = o.cue("size_prior") if not o.skipped else None  # type: ignore[attr-defined]
         if sp is None or not o.on_floor or not o.size_known or o.truncation.bottom:  # type: ignore[attr-defined]
+            continue
+        if i in occluded:
             continue
         if float(o.detection.score) < MIN_CONTACT_SCORE:  # type: ignore[attr-defined]
             continue
