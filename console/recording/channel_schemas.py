@@ -16,6 +16,7 @@ from pipeline.scene_schema import SCENE_SCHEMA
 from planner.mission_schema import MISSION_SCHEMA
 
 from console.recording import recording_schemas as rs
+from console.session.search_report import STEP_KINDS
 
 _NUM = {"type": "number"}
 _VEC3 = {"type": "array", "items": _NUM, "minItems": 3, "maxItems": 3}
@@ -23,6 +24,14 @@ _QUAT = {"type": "array", "items": _NUM, "minItems": 4, "maxItems": 4, "descript
 _POSE = {"type": "object", "properties": {"translation": {**_VEC3, "description": "[x, y, z] [m]"},
                                           "quaternion_xyzw": _QUAT}}
 _WORKSPACE = {"type": "object", "properties": {"min": _VEC3, "max": _VEC3, "resolution": _NUM}}
+_NULL_VEC3 = {"type": ["array", "null"], "items": _NUM, "minItems": 3, "maxItems": 3}
+_VIEWPOINT = {"type": "object", "description": "a search viewpoint (planner.search_viewpoints.Viewpoint)", "properties": {
+    "goal": {**_VEC3, "description": "where the planner goes, world frame [m]"},
+    "eye": {**_VEC3, "description": "camera position, world frame [m]"},
+    "yaw": {**_NUM, "description": "heading to face [rad], counter-clockwise from +x"},
+    "mode": {"enum": ["walk", "fly"]}, "gain": {**_NUM, "description": "unknown volume in view [m^3], weighted"},
+    "cost": {**_NUM, "description": "the planner's path cost"}, "score": _NUM, "why": {"type": "string"}},
+    "required": ["goal", "eye", "yaw", "mode", "gain", "cost"]}
 
 
 def _bare(schema: dict[str, Any]) -> dict[str, Any]:
@@ -32,9 +41,12 @@ def _bare(schema: dict[str, Any]) -> dict[str, Any]:
     return s
 
 
-def _topic(title: str, description: str, properties: dict[str, Any]) -> dict[str, Any]:
-    return {"$schema": "https://json-schema.org/draft/2020-12/schema", "title": title, "description": description,
-            "type": "object", "properties": properties}
+def _topic(title: str, description: str, properties: dict[str, Any], required: list[str] | None = None) -> dict[str, Any]:
+    out = {"$schema": "https://json-schema.org/draft/2020-12/schema", "title": title, "description": description,
+           "type": "object", "properties": properties}
+    if required:
+        out["required"] = required
+    return out
 
 
 CHANNEL_SCHEMAS: dict[str, dict[str, Any]] = {
@@ -92,6 +104,35 @@ CHANNEL_SCHEMAS: dict[str, dict[str, Any]] = {
         "known_space": {"type": ["object", "null"]}, "free": {"type": "integer"}, "occupied": {"type": "integer"},
         "unknown": {"type": "integer"}, "unlabelled": {"type": "integer"}, "plan_unknown": {"type": "string"},
     }),
+    rs.SEARCH_STEP: _topic("morphonavi.SearchStep", "one step of a search (console.session.search_report)", {
+        "search_id": {"type": "string"}, "index": {"type": "integer", "minimum": 1},
+        "kind": {"enum": list(STEP_KINDS)}, "text": {"type": "string"},
+        "stamp": {"type": "number", "description": "[s since the Unix epoch]"},
+        "robot": {**_NULL_VEC3, "description": "robot position, world frame [m]"},
+        "captures": {"type": ["integer", "null"], "description": "captures so far"},
+        "elapsed": {"type": ["number", "null"], "description": "[s] since the search started"},
+        "battery": {"type": ["number", "null"], "description": "charge [0..1]"},
+        "viewpoint": {"anyOf": [_VIEWPOINT, {"type": "null"}], "description": "the viewpoint chosen"},
+        "candidates": {"type": ["array", "null"], "items": _VIEWPOINT, "description": "the best few, chosen first"},
+        "choose_seconds": {"type": ["number", "null"], "description": "time of the choice [s]"},
+        "capture_id": {"type": ["string", "null"]}, "target_id": {"type": ["string", "null"]},
+        "mission": {"anyOf": [{"type": "object", "properties": {
+            "id": {"type": "string"}, "kinds": {"type": "array", "items": {"type": "string"}},
+            "path": {"type": "array", "items": _VEC3, "description": "waypoints, world frame [m]"}},
+            "required": ["id", "kinds", "path"]}, {"type": "null"}], "description": "the move's mission"},
+    }, required=["search_id", "index", "kind", "text"]),
+    rs.SEARCH_RESULT: _topic("morphonavi.SearchResult", "how a search ended (result.json)", {
+        "search_id": {"type": "string"}, "found": {"type": "boolean"}, "target": {"type": "string"},
+        "target_id": {"type": ["string", "null"]}, "target_position": _NULL_VEC3,
+        "seen_by": {"type": "array", "items": {"type": "string"}}, "final_position": _NULL_VEC3,
+        "distance_to_target": {"type": ["number", "null"], "description": "[m] in plan"},
+        "path_length": {"type": "number", "description": "[m]"}, "captures": {"type": "integer"},
+        "time": {"type": "number", "description": "[s]"}, "reason": {"type": "string"},
+        "seen_share": {"type": ["number", "null"], "description": "share of the workspace seen [0..1]"},
+        "left_unseen": {"type": "string"}, "battery": {"type": ["number", "null"], "description": "charge [0..1]"},
+        "choose_seconds": {"type": "array", "items": _NUM, "description": "each next-viewpoint choice [s]"},
+        "steps": {"type": "array", "items": {"type": "string"}},
+    }, required=["search_id", "found", "reason"]),
 }
 """Schema of each JSON topic (a topic without one here gets a bare object schema)."""
 

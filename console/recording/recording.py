@@ -33,7 +33,7 @@ from pipeline.scene import scene_to_dict
 from console.recording import recording_schemas as rs
 from console.recording.channel_schemas import schema_bytes
 from console.session.session_types import Notice, RobotSnapshot
-from console.session.topics import AGENT, CAPTURE, GRID, JOB, MISSION, NOTICE, ROBOT, ROUTE, RUN, SCENE, SELECTION, SETTINGS
+from console.session.topics import AGENT, CAPTURE, GRID, JOB, MISSION, NOTICE, ROBOT, ROUTE, RUN, SCENE, SEARCH, SELECTION, SETTINGS
 
 log = logging.getLogger(__name__)
 
@@ -175,7 +175,7 @@ class Recorder:
             if key != self._run_key or now - self._run_at >= 0.5:  # progress alone: at most 2 Hz
                 self._run_key, self._run_at = key, now
                 self._put(RUN, payload)
-        elif topic in (CAPTURE, NOTICE, AGENT):
+        elif topic in (CAPTURE, NOTICE, AGENT, SEARCH):
             self._put(topic, payload)
         elif topic == KNOWN:
             self._put(KNOWN, (s.known_space, payload))
@@ -355,6 +355,11 @@ class Recorder:
         elif topic == AGENT:  # console.mcp: the event as JSON, and a log line replay lists
             self._encode(rs.AGENT_EVENTS, ns, payload)
             self._encode(rs.LOG, ns, rs.log_message(ns, str(payload.get("text", "")), payload.get("level", "info"), "agent"))
+        elif topic == SEARCH:  # console.session.search_report: a step, or the end (it has "found")
+            end = "found" in payload
+            self._encode(rs.SEARCH_RESULT if end else rs.SEARCH_STEP, ns, payload)
+            text = f"ended: {payload.get('reason', '')}" if end else str(payload.get("text", ""))
+            self._encode(rs.LOG, ns, rs.log_message(ns, f"search: {text}", name="search"))
 
     def _proxy_models(self) -> Any:
         if self._proxies is None:

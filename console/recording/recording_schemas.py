@@ -45,6 +45,8 @@ MISSION_JSON = "/morphonavi/mission"
 SESSION_INFO = "/morphonavi/session"
 AGENT_EVENTS = "/agent/events"  # a language-model agent's tool calls, proposals, the operator's decisions
 KNOWN_SPACE = "/map/known_space"  # the known space (pipeline.mapping.known_space JSON form) and its counts
+SEARCH_STEP = "/search/step"  # a search step: viewpoint chosen (gain, cost, why), move, capture, pause ...
+SEARCH_RESULT = "/search/result"  # how a search ended (result.json with the search id)
 
 FOXGLOVE_TYPES: dict[str, Any] = {
     POSE: fm.PoseInFrame, TF: fm.FrameTransform, IMAGE: fm.CompressedImage, CALIBRATION: fm.CameraCalibration,
@@ -54,7 +56,7 @@ JSON_TOPICS: dict[str, str] = {
     ROBOT_STATE: "morphonavi.RobotState", CAPTURE_META: "morphonavi.Capture", PROGRESS: "morphonavi.MissionProgress",
     SCENE_JSON: "morphonavi.Scene", ROUTE_JSON: "morphonavi.Route", MISSION_JSON: "morphonavi.Mission",
     SESSION_INFO: "morphonavi.Session", AGENT_EVENTS: "morphonavi.AgentEvent",
-    KNOWN_SPACE: "morphonavi.KnownSpace",
+    KNOWN_SPACE: "morphonavi.KnownSpace", SEARCH_STEP: "morphonavi.SearchStep", SEARCH_RESULT: "morphonavi.SearchResult",
 }
 
 OCCUPIED_RGBA = (0.86, 0.2, 0.18, 0.6)

@@ -50,6 +50,8 @@ class ReplayState:
     """The session as recorded at ``time`` [ns]; each part is ``None`` before it was first recorded.
 
     ``versions`` holds, per part, the log time of the message it comes from (to tell what changed).
+    ``search`` holds the steps (``/search/step`` records) of the search under way or last ended at that time,
+    and ``search_result`` its end (``/search/result``) once it has ended.
     """
 
     time: int
@@ -61,6 +63,8 @@ class ReplayState:
     run: RunStatus
     log: tuple[tuple[int, str], ...]
     versions: dict[str, int]
+    search: tuple[dict[str, Any], ...] = ()
+    search_result: dict[str, Any] | None = None
 
 
 class _Track:
@@ -295,6 +299,9 @@ class Recording:
                 return None if v["mission"] is None else Mission.from_dict(v["mission"])
             if topic == rs.ROBOT_STATE:
                 return _robot(v, None)
+            if topic in (rs.SEARCH_STEP, rs.SEARCH_RESULT) and not (isinstance(v, dict)
+                                                                   and isinstance(v.get("search_id"), str)):
+                raise ValueError("not a search record (no search_id)")
             if topic == rs.PROGRESS:
                 return RunStatus(str(v["state"]), None if v["segment"] is None else int(v["segment"]),
                                  float(v["fraction"]), str(v["message"]))
@@ -370,5 +377,22 @@ class Recording:
         if logs is not None:
             i = bisect.bisect_right(logs.times, ns)
             lines = tuple(zip(logs.times[max(0, i - log_lines):i], logs.items[max(0, i - log_lines):i]))
+        steps, result = self._search_at(ns, versions)
         return ReplayState(ns, scene, get(rs.ROUTE_JSON), get(rs.MISSION_JSON), capture, robot,
-                           get(rs.PROGRESS) or RunStatus(), lines, versions)
+                           get(rs.PROGRESS) or RunStatus(), lines, versions, steps, result)
+
+    def _search_at(self, ns: int, versions: dict[str, int]) -> tuple[tuple[dict[str, Any], ...], dict[str, Any] | None]:
+        """The steps of the search last stepped at ``ns`` and its result if it has ended by then."""
+        tr = self._tracks.get(rs.SEARCH_STEP)
+        i = bisect.bisect_right(tr.times, ns) if tr is not None else 0
+        if tr is None or i == 0:
+            return (), None
+        versions[rs.SEARCH_STEP] = tr.times[i - 1]
+        sid = tr.items[i - 1].get("search_id")
+        steps = tuple(x for x in tr.items[:i] if x.get("search_id") == sid)
+        res = self._tracks.get(rs.SEARCH_RESULT)
+        j = bisect.bisect_right(res.times, ns) if res is not None else 0
+        if res is not None and j > 0 and res.items[j - 1].get("search_id") == sid:
+            versions[rs.SEARCH_RESULT] = res.times[j - 1]
+            return steps, res.items[j - 1]
+        return steps, None

@@ -27,6 +27,7 @@ from console.views.objects_view import ObjectsView
 from console.views.paths_view import PathsView
 from console.recording.replay import Recording
 from console.recording.replay_session import ReplaySession
+from console.recording.replay_search import SearchReplayView
 from console.views.robot_view import RobotView
 
 log = logging.getLogger(__name__)
@@ -109,6 +110,8 @@ class ReplayApp:
             self._t = min(max(float(seconds), 0.0), rec.duration)
             state = rec.state_at(rec.start + int(round(self._t * 1e9)))
             self.session.show(state)
+            if "search" in self.views:
+                self.views["search"].show(state)
         if "slider" in self.views:
             self.views["slider"].value = round(self._t, 1)
             self._show_clock(state)
@@ -172,7 +175,9 @@ class ReplayApp:
             speed = gui.add_dropdown("Speed", SPEEDS, initial_value="1", hint="Playback speed (x real time)")
             self._clock = gui.add_markdown("")
             self._log = gui.add_markdown("")
+            search_line = gui.add_markdown("")
         self.views["slider"] = slider
+        self.views["search"] = SearchReplayView(server, search_line)  # the search's viewpoints and paths
 
         @slider.on_update
         def _(event: Any) -> None:

@@ -57,11 +57,11 @@ from console.session.session_types import (
     SpawnReport, Vec3, fmt_point,
 )
 from console.session.topics import (
-    AGENT, CAPTURE, GRID, JOB, MISSION, NOTICE, ROBOT, ROUTE, RUN, SCENE, SELECTION, SETTINGS, Listener,
+    AGENT, CAPTURE, GRID, JOB, MISSION, NOTICE, ROBOT, ROUTE, RUN, SCENE, SEARCH, SELECTION, SETTINGS, Listener,
 )
 
 __all__ = [
-    "CAPTURE", "CAPTURE_DIR", "GRID", "JOB", "MISSION", "NOTICE", "ROBOT", "ROUTE", "RUN", "SCENE", "SELECTION",
+    "CAPTURE", "CAPTURE_DIR", "GRID", "JOB", "MISSION", "NOTICE", "ROBOT", "ROUTE", "RUN", "SCENE", "SEARCH", "SELECTION",
     "SESSION_FILE", "SESSION_VERSION", "SETTINGS", "CaptureRecord", "Detection", "JobStatus", "Listener",
     "Notice", "RobotSnapshot", "RouteSnapshot", "RunStatus", "Session", "SessionError", "Settings",
     "SpawnReport", "Vec3", "merge_observations", "ray_plane",
@@ -150,6 +150,11 @@ class Session(SessionReads, Persistence, Undo, OperatorRules, KnownSpaceSession)
         """Tell every listener (the recorder, the agent panel) what a language-model agent did: a tool
         call, a proposal or the operator's decision (:mod:`console.mcp`); ``event`` is JSON-ready."""
         self._emit([(AGENT, dict(event))])
+
+    def announce_search(self, event: dict[str, Any]) -> None:
+        """Tell every listener (the recorder, replay) a search step or its end
+        (:mod:`console.session.search_report`); ``event`` is JSON-ready."""
+        self._emit([(SEARCH, dict(event))])
 
     # --- settings --------------------------------------------------------------------------------
     def set_goal_mode(self, mode: str, altitude: float | None = None) -> None:

@@ -1,0 +1,108 @@
+"""Replay of a search: the viewpoints it chose and the paths it flew and walked, drawn at the shown time.
+
+:class:`SearchReplayView` draws, from the ``/search/step`` records up to the replay's time
+(:attr:`console.recording.replay.ReplayState.search`): every viewpoint chosen so far (an arrow from the
+camera position along the heading; the latest in orange with its gain and cost, earlier ones grey), the
+path of every move (the mission's waypoints; the latest in blue) and, in a *Search* line in the replay
+panel, the step shown and the search's end once it has ended. World frame (z up) [m], headings [rad].
+"""
+
+from __future__ import annotations
+
+import html
+import math
+from typing import Any, Sequence
+
+import numpy as np
+
+CHOSEN_RGB = (255, 140, 0)
+EARLIER_RGB = (150, 150, 150)
+PATH_RGB = (30, 110, 230)
+OLD_PATH_RGB = (140, 170, 220)
+ARROW_M = 0.6
+"""Length of a viewpoint's heading arrow [m]."""
+
+
+def viewpoint_segments(viewpoints: Sequence[dict[str, Any]]) -> np.ndarray:
+    """``N x 2 x 3`` arrows (camera position -> ``ARROW_M`` along the heading), world [m]."""
+    out = np.zeros((len(viewpoints), 2, 3), dtype=np.float32)
+    for n, vp in enumerate(viewpoints):
+        e = np.asarray(vp["eye"], dtype=np.float32)
+        yaw = float(vp["yaw"])
+        out[n, 0] = e
+        out[n, 1] = e + ARROW_M * np.array([math.cos(yaw), math.sin(yaw), 0.0], dtype=np.float32)
+    return out
+
+
+def path_segments(paths: Sequence[Sequence[Sequence[float]]]) -> np.ndarray:
+    """``N x 2 x 3`` line pieces of polylines (world [m])."""
+    pieces = [(p[k], p[k + 1]) for p in paths for k in range(len(p) - 1)]
+    return np.asarray(pieces, dtype=np.float32).reshape(-1, 2, 3)
+
+
+def search_line(steps: Sequence[dict[str, Any]], result: dict[str, Any] | None) -> str:
+    """The replay panel's search line (HTML): the step shown, and the end when it has ended."""
+    if not steps:
+        return ""
+    last = steps[-1]
+    text = f"<b>Search</b> {html.escape(str(last.get('search_id', '')))} step {int(last.get('index', 0))}: " \
+           f"{html.escape(str(last.get('text', '')))}"
+    if result is not None:
+        how = "found" if result.get("found") else "ended"
+        text += f"<br><b>{how}</b>: {html.escape(str(result.get('reason', '')))}"
+        if result.get("left_unseen"):
+            text += f"; left unseen: {html.escape(str(result['left_unseen']))}"
+    return f"<small>{text}</small>"
+
+
+class SearchReplayView:
+    """Draws a recorded search (see the module docstring).
+
+    Args:
+        server: The replay's viser server.
+        line: A markdown handle for the search line (in the Replay folder).
+    """
+
+    def __init__(self, server: Any, line: Any) -> None:
+        self._server, self._line = server, line
+        self._key: Any = None
+        self._handles: dict[str, Any] = {}
+        self.drawn: dict[str, int] = {"viewpoints": 0, "paths": 0}
+
+    def _put(self, name: str, make: Any) -> None:
+        old = self._handles.pop(name, None)
+        if old is not None:
+            try:
+                old.remove()
+            except Exception:
+                pass
+        if make is not None:
+            self._handles[name] = make()
+
+    def show(self, state: Any) -> None:
+        """Draw the search as recorded at ``state`` (a :class:`~console.recording.replay.ReplayState`)."""
+        steps = tuple(getattr(state, "search", ()) or ())
+        result = getattr(state, "search_result", None)
+        key = (len(steps), steps[-1].get("search_id") if steps else None, result is not None)
+        if key == self._key:
+            return
+        self._key = key
+        vps = [s["viewpoint"] for s in steps if s.get("kind") == "viewpoint" and s.get("viewpoint")]
+        paths = [s["mission"]["path"] for s in steps if s.get("kind") == "move" and s.get("mission")]
+        sc = self._server.scene
+        self._put("earlier", None if len(vps) < 2 else lambda: sc.add_line_segments(
+            "/search/replay/viewpoints", viewpoint_segments(vps[:-1]), EARLIER_RGB, thickness=0.025))
+        self._put("chosen", None if not vps else lambda: sc.add_line_segments(
+            "/search/replay/chosen", viewpoint_segments(vps[-1:]), CHOSEN_RGB, thickness=0.05))
+        self._put("label", None if not vps else lambda: sc.add_label(
+            "/search/replay/chosen_why", f"viewpoint {len(vps)}: gain {float(vps[-1]['gain']):.1f} m³, "
+            f"cost {float(vps[-1]['cost']):.1f}", position=tuple(float(v) for v in vps[-1]["eye"])))
+        self._put("old_paths", None if len(paths) < 2 else lambda: sc.add_line_segments(
+            "/search/replay/paths", path_segments(paths[:-1]), OLD_PATH_RGB, thickness=0.02))
+        self._put("path", None if not paths or len(paths[-1]) < 2 else lambda: sc.add_line_segments(
+            "/search/replay/path", path_segments(paths[-1:]), PATH_RGB, thickness=0.035))
+        self.drawn = {"viewpoints": len(vps), "paths": len(paths)}
+        self._line.content = search_line(steps, result)
+
+
+__all__ = ["SearchReplayView", "path_segments", "search_line", "viewpoint_segments"]
