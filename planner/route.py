@@ -29,6 +29,7 @@ from planner.astar import AStarSearcher, min_finite_cost
 from planner.cspace import box_distance
 from planner.grid import Closed, CostWeights, PlanningGrid
 from planner.mission import Mission, mission_from_cells
+from planner.goal_look import next_look
 from planner.viewpoint import frontier_spot, suggest_viewpoint
 
 Vec3 = tuple[float, float, float]
@@ -243,10 +244,15 @@ class Route:
                 owner = next((g.owners[int(i)] for i in col if i >= 0), None)
             return f"{here} is inside an obstacle" + (f" ({owner})" if owner else ""), None
         if why is Closed.UNKNOWN:
-            vp = self.viewpoint_for(p)
-            if vp is not None:
-                return (f"{here} is not seen yet: look from {_fmt(vp)} m (go there and capture towards it), "
-                        "or Look around"), vp
+            look = self.look_for(p)
+            if look is not None and look.sees > 0:
+                return (f"{here} is not seen yet: look from {_fmt(look.eye)} m (go there and capture towards it: "
+                        "Go look), or Look around"), look.eye
+            if look is not None:
+                self._last_frontier = look.eye
+                return (f"{here} is not seen yet and no seen-free spot the robot can reach sees it: next look from "
+                        f"{_fmt(look.eye)} m {'hovering' if look.mode == 'fly' else 'on the floor'} (it opens the "
+                        "space the goal can be seen from: Go look), or Look around there"), None
             edge = self.frontier_for(p)
             self._last_frontier = edge
             if edge is not None:
@@ -293,7 +299,17 @@ class Route:
         s = self._grid.workspace.cell_of(self.start)
         if s is None or not math.isfinite(self._cost[s]):
             return None
-        return suggest_viewpoint(self._grid, np.isfinite(self._cost), s, target)
+        return suggest_viewpoint(self._grid, self._cost, s, target)
+
+    def look_for(self, target: Sequence[float], avoid: Sequence[Any] = ()) -> Any:
+        """The next look towards ``target`` not seen yet (a :class:`planner.goal_look.Look`: where to go,
+        the camera position, the heading), or ``None``; ``avoid``: ``(camera position, heading)`` of
+        earlier captures (see :func:`planner.goal_look.next_look`)."""
+        s = self._grid.workspace.cell_of(self.start)
+        if s is None or not math.isfinite(self._cost[s]):
+            return None
+        looks = next_look(self._grid, self._cost, s, target, avoid=avoid)
+        return looks[0] if looks else None
 
     def frontier_for(self, target: Sequence[float]) -> Vec3 | None:
         """The reachable spot at the edge of what was seen nearest ``target`` (camera position, world

@@ -1,8 +1,12 @@
 """Where to look from: a reachable seen-free spot from which the camera can see a point not seen yet.
 
+Given the planner's costs, :func:`suggest_viewpoint` is the look of :func:`planner.goal_look.next_look`
+(the goal's own cells seen with the real camera model, hover spots included). The rest of this module
+is the simpler rule used with only a passable mask:
+
 World frame (z up) [m]. Candidates are the passable cells of the planning grid joined to the
 robot's start (face-connected, as the A* moves without corner cutting): on the floor layer the
-camera stands at ``robot.camera_height`` above the floor; in the air at the cell's centre. A
+camera stands at ``robot.camera_height`` above the floor; in the air it rides that high above the cell's centre. A
 candidate sees the target when
 
 - the target lies between :data:`MIN_RANGE` and :data:`MAX_RANGE` from the camera,
@@ -30,6 +34,7 @@ import numpy as np
 from scipy import ndimage
 
 from planner.cspace import dilate
+from planner.goal_look import next_look
 from planner.grid import Closed, PlanningGrid
 
 MIN_RANGE = 0.5
@@ -79,14 +84,21 @@ def frontier_spot(grid: PlanningGrid, passable: np.ndarray, start_cell: Sequence
 def suggest_viewpoint(grid: PlanningGrid, passable: np.ndarray, start_cell: Sequence[int],
                       target: Sequence[float]) -> tuple[float, float, float] | None:
     """The camera position (world [m]) of the best reachable viewpoint that sees ``target``, or
-    ``None`` when no reachable spot does (then: Look around).
+    ``None`` when no reachable spot does (then: Look around, or the next look of a chain).
 
     Args:
         grid: The planning grid.
-        passable: ``bool [nx, ny, nz]``: cells the robot may be in (finite cost).
+        passable: The planner's per-cell cost [1/m] (``inf`` impassable): the look of
+            :func:`planner.goal_look.next_look` (hover spots included, scored by the goal's cells it
+            sees with the real camera, occlusion included), when it sees any of them; or
+            ``bool [nx, ny, nz]`` cells the robot may be in: the nearest spot whose line of sight to the
+            target point is clear (no gain).
         start_cell: The robot's cell (must be passable).
         target: The point to see (world [m]).
     """
+    if np.asarray(passable).dtype != bool:
+        looks = next_look(grid, np.asarray(passable, dtype=np.float64), start_cell, target)
+        return looks[0].eye if looks and looks[0].sees > 0 else None
     ws = grid.workspace
     s = tuple(int(v) for v in start_cell)
     if not passable[s]:
@@ -98,7 +110,8 @@ def suggest_viewpoint(grid: PlanningGrid, passable: np.ndarray, start_cell: Sequ
         return None
     eyes = ws.centers(idx)
     ground = idx[:, 2] == 0
-    eyes[ground, 2] = ws.floor + grid.robot.camera_height
+    eyes[ground, 2] = ws.floor
+    eyes[:, 2] += grid.robot.camera_height  # the camera rides on the robot, hovering too
     t = np.asarray([float(v) for v in target])
     d = t - eyes
     dist = np.linalg.norm(d, axis=1)

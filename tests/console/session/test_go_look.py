@@ -1,0 +1,86 @@
+"""Go look on the simulator without the browser: the chain of looks towards a goal behind the paper's
+line of boxes until its route is planned, and the route then lands behind the line.
+
+Ground-truth perception (the simulator's rendered depth for the known space), time x10; waits on the
+jobs' state with generous deadlines (the machine may be loaded)."""
+
+from __future__ import annotations
+
+import math
+import time
+from pathlib import Path
+
+import pytest
+
+from console.cli.search_cmd import HeadlessRig
+from console.link.world_file import paper_world
+from console.session.go_look import GoLookJob, looked_from
+from console.session.session import SessionError
+
+GOAL = (2.5, 5.0, 0.0)
+MAX_LOOKS = 4
+
+
+@pytest.fixture()
+def rig(tmp_path: Path):
+    r = HeadlessRig(paper_world(), tmp_path / "session", time_scale=10.0)
+    r.go_look = GoLookJob(r.session, r.robot, r.mapping, r.runner)
+    yield r
+    r.go_look.stop()
+    r.go_look.wait(60)
+    r.close()
+
+
+def _run_mission(rig) -> str:
+    s = rig.session
+    before = s.run
+    rig.runner.execute(s.build_mission())
+    end = time.monotonic() + 600
+    while time.monotonic() < end:
+        if s.run is not before and s.run.state in ("done", "aborted", "failed"):
+            return s.run.state
+        time.sleep(0.05)
+    return "timeout"
+
+
+def test_go_look_chain_opens_a_goal_behind_the_line_and_the_route_lands_there(rig) -> None:
+    s = rig.session
+    assert rig.mapping.run_as("start")
+    first = s.add_goal(GOAL)
+    assert not first.ok and "not seen yet" in first.message and "Go look" in first.message, first.message
+    kinds: list[str] = []
+    for _ in range(MAX_LOOKS):
+        rig.go_look.start(GOAL[:2])
+        assert rig.go_look.wait(900), "Go look did not end"
+        out = rig.go_look.outcome
+        assert s.job.error is None, s.job.error
+        if out.planned:
+            break
+        assert out.next_look is not None and "next look from (" in out.message, out.message
+        assert "the floor at (2.50, 5.00) is still " in out.message
+    out = rig.go_look.outcome
+    assert out.planned, out.message
+    assert 1 <= out.looks <= MAX_LOOKS
+    kinds += out.kinds
+    print(f'looks {out.looks}: {out.kinds}; {out.message}')
+    # no look repeats a capture's spot and heading
+    poses = looked_from(s)
+    for n, (a, ya) in enumerate(poses):
+        for b, yb in poses[n + 1:]:
+            assert not (math.dist(a, b) < 0.3 and abs((ya - yb + math.pi) % (2 * math.pi) - math.pi) < 0.2)
+    s.register()
+    final = s.build_mission()
+    kinds.append("-".join(dict.fromkeys(final.kinds())))
+    assert final.kinds()[-1] in ("land", "walk") and "land" in final.kinds()
+    assert _run_mission(rig) == "done", s.run.message
+    pos = rig.robot.latest_state().position
+    assert pos[1] > 4.3 and pos[2] < 0.05 and math.dist(pos[:2], GOAL[:2]) < 0.5, pos
+    journey = "-".join(kinds).split("-")
+    assert journey[0] == "walk" and journey.index("takeoff") < journey.index("fly") < len(journey) - 1 - journey[::-1].index("land")
+
+
+def test_go_look_refuses_bad_goals_and_a_busy_robot(rig) -> None:
+    with pytest.raises(SessionError, match="finite"):
+        rig.go_look.start((float("nan"), 1.0))
+    with pytest.raises(SessionError, match="outside the workspace"):
+        rig.go_look.start((9.0, 1.0))
