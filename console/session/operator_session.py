@@ -22,8 +22,9 @@ import numpy as np
 from planner.mission import Mission, MissionError
 from planner.route import path_points
 
-from console.session import mission_rules
+from console.session import button_rules, mission_rules
 from console.session import operator_state as rules
+from console.session.battery_estimate import DrainRate, hover_text
 from console.session.session_types import Notice, RunStatus, SessionError, Vec3
 from console.session.topics import MISSION, ROUTE, RUN
 
@@ -42,6 +43,8 @@ class OperatorView:
         air_end: Height above the floor [m] at which the mission ends in the air, or ``None``.
         running: Name of the vehicle command being flown (``Land here``, ``Return``), or ``""``.
         launch: Where Return goes (the floor spot the robot last stood on disarmed), or ``None``.
+        battery_note: While the robot hovers with no mission under way, the battery time left to land
+            (:func:`console.session.battery_estimate.hover_text`), else ``""``.
     """
 
     route_note: str | None = None
@@ -51,6 +54,7 @@ class OperatorView:
     air_end: float | None = None
     running: str = ""
     launch: Vec3 | None = None
+    battery_note: str = ""
 
 
 @dataclass(frozen=True)
@@ -102,11 +106,14 @@ class OperatorRules:
                        and run.active else None)
             if retired is None and run.active and self._running is not None and not self._running.command:
                 retired = rules.battery_blocker(robot)  # low battery: the operator's mission does not resume
+            hovering = (robot is not None and not run.active and rules.airborne(robot, ws)
+                        and robot.mode in button_rules.HELD_MODES)
             return OperatorView(note, blocker, retired,
-                                rules.vehicle_commands(robot, run, ws, self._launch, self._grid),  # type: ignore[attr-defined]
+                                button_rules.vehicle_commands(robot, run, ws, self._launch, self._grid),  # type: ignore[attr-defined]
                                 rules.ends_in_air(self._mission, ws),  # type: ignore[attr-defined]
                                 self._running.command if self._running is not None and run.active else "",
-                                self._launch)
+                                self._launch,
+                                hover_text(robot.battery, self._drain_rate().rate()) if hovering else "")  # type: ignore[union-attr]
 
     # --- hooks called by the session -------------------------------------------------------------
     def _goal_problem_locked(self, goal: Vec3) -> str | None:
@@ -167,9 +174,17 @@ class OperatorRules:
             threading.Thread(target=self._safe_abort, args=(abort,), name="retire-run", daemon=True).start()
         return None
 
+    def _drain_rate(self) -> DrainRate:
+        """The battery's drain in the air, measured from this session's robot reports (made on first use)."""
+        drain = self.__dict__.get("_drain")
+        if drain is None:
+            drain = self.__dict__.setdefault("_drain", DrainRate())
+        return drain
+
     def _battery_rules_locked(self, r: rules.RobotSnapshot) -> None:
         """Warn every tab once per crossing of a battery threshold; at critical charge in the air,
         end the run and land here (unless the vehicle's own failsafe acts)."""
+        self._drain_rate().add(r.stamp, r.battery, rules.airborne(r, self._workspace))  # type: ignore[attr-defined]
         level = {"ok": 0, "low": 1, "critical": 2}[rules.battery_level(r)]
         if level > self._battery_warned:
             why = rules.battery_blocker(r) or ""
@@ -349,20 +364,18 @@ class OperatorRules:
         only): land even on floor not seen (a forced landing beats a crash)."""
         with self._lock:  # type: ignore[attr-defined]
             r, ws = self._robot, self._workspace  # type: ignore[attr-defined]
-            grid = None if forced else self._grid  # type: ignore[attr-defined]
-            state = rules.vehicle_commands(r, self._run, ws, self._launch, grid)["land"]  # type: ignore[attr-defined]
+            # one rule for the button and this refusal (console.session.button_rules): obstacle or unseen space below,
+            # not flying, link or position lost, a mission under way
+            state = button_rules.land_here(r, self._run, ws, self._launch, self._grid, forced)  # type: ignore[attr-defined]
             if not state.enabled or r is None:
                 raise SessionError(state.reason or "Land here applies when the robot is in the air")
-            why = rules.landing_blocker(r, self._grid, forced)  # type: ignore[attr-defined]
-            if why is not None:
-                raise SessionError(f"cannot land here: {why}")
             return rules.land_here_mission(r, ws, f"land-{uuid.uuid4().hex[:6]}")
 
     def return_mission(self) -> Mission:
         """Return as a mission: the Aerial-Ground A* from the robot's pose to the launch spot."""
         with self._lock:  # type: ignore[attr-defined]
             r, ws = self._robot, self._workspace  # type: ignore[attr-defined]
-            state = rules.vehicle_commands(r, self._run, ws, self._launch)["return"]  # type: ignore[attr-defined]
+            state = button_rules.return_home(r, self._run, ws, self._launch)  # type: ignore[attr-defined]
             origin = rules.robot_origin(r, ws) if r is not None else None
             if not state.enabled or origin is None or self._launch is None:
                 raise SessionError(state.reason or "Return applies when the robot is armed or in the air")

@@ -1,8 +1,8 @@
 """Vehicle commands outside missions: Hold, Land here, Return, Disarm, Take control.
 
-Whether a command applies (and why not) is decided by the session's operator rules
-(:func:`console.session.operator_state.vehicle_commands`); this class carries a command out over the robot
-link. Land here and Return are flown as small missions through the mission manager (so they have
+Whether a command applies (and why not) is decided by the session's rule for its button
+(:mod:`console.session.button_rules`): the button is off with the same reason this class refuses
+with, so they never disagree. This class carries a command out over the robot link. Land here and Return are flown as small missions through the mission manager (so they have
 progress, Pause / Abort and the link-loss failsafe like any mission); Hold and Disarm go straight
 to the link (:meth:`~console.link.base.RobotLink.hold`, :meth:`~console.link.base.RobotLink.disarm`),
 so the simulator and MAVLink vehicles both do them.
@@ -18,6 +18,7 @@ import logging
 import time
 from typing import Any
 
+from console.session.button_rules import refusal
 from console.session.session import Session, SessionError
 
 log = logging.getLogger(__name__)
@@ -62,11 +63,9 @@ class VehicleCommands:
         self._session.notify("Battery critical", f"the mission was ended; {msg}", "warning")
 
     def _check(self, name: str) -> None:
-        state = self._session.operator_state(self._runner is not None).commands.get(name)
-        if state is None or not state.shown:
-            raise SessionError(f"{LABELS[name]} applies only while the robot is armed or off the ground")
-        if not state.enabled:
-            raise SessionError(f"{LABELS[name]} is not possible now: {state.reason}")
+        why = refusal(name, LABELS[name], self._session.operator_state(self._runner is not None).commands)
+        if why is not None:
+            raise SessionError(why)
 
     def run(self, name: str, forced: bool = False) -> str:
         """Carry out command ``name`` (``hold``, ``land``, ``return``, ``disarm``); returns a message

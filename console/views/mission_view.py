@@ -18,7 +18,9 @@ from planner.mission import Mission, SegmentKind
 
 from console.session import mission_rules
 from console.session import operator_state as rules
+from console.session.button_rules import return_hint
 from console.views.client_notice import tell
+from console.views.page_a11y import hint_spans
 from console.views.paths_view import KIND_RGB
 from console.wording import kind_text, plural
 from console.session.session import MISSION, ROBOT, ROUTE, RUN, RunStatus, Session, SessionError
@@ -111,6 +113,7 @@ class MissionView:
         self._abort = gui.add_button("Abort", color="red", icon=viser.Icon.PLAYER_STOP, disabled=True, visible=False)
         self._progress = gui.add_progress_bar(0.0, visible=False, color="green")
         self._status = gui.add_markdown("")
+        self._hints = gui.add_html("")  # Build / Execute hover text, shown by the page script (page_a11y)
         build.on_click(self._on_build)
         self._execute.on_click(self._on_execute)
         self._replan.on_click(lambda e: self._act(e, "Re-planned", self._session.replan_from_robot))
@@ -131,7 +134,7 @@ class MissionView:
     def _rules_changed(self) -> bool:
         """Whether what the operator rules say changed (robot states arrive at tens of Hz)."""
         view = self._session.operator_state(self._runner is not None)
-        key = (view.execute_blocker, view.route_note, view.resume_blocker, view.air_end)
+        key = (view.execute_blocker, view.route_note, view.resume_blocker, view.air_end, view.launch)
         return key != self._shown
 
     def _act(self, event: Any, title: str, action: Any) -> None:
@@ -189,9 +192,18 @@ class MissionView:
             else:
                 self._table.content = segment_table(mission, run.segment if run.active else None)
             view = self._session.operator_state(self._runner is not None)
-            self._shown = (view.execute_blocker, view.route_note, view.resume_blocker, view.air_end)
+            self._shown = (view.execute_blocker, view.route_note, view.resume_blocker, view.air_end, view.launch)
             self._execute.visible = not run.active
             self._execute.disabled = view.execute_blocker is not None
+            # one rule per button, the same the click is refused with (execute_blocker, mission_rules)
+            self._execute.hint = ("Run the mission on the robot" if view.execute_blocker is None
+                                  else f"Execute is off: {view.execute_blocker}")
+            build_hint = "Split the green path into walk / take-off / fly / land segments"
+            if self._build.disabled:
+                why = build_off or ("a replay changes nothing" if self.read_only else "register a path first")
+                build_hint += f" · Build mission is off: {why}"
+            self._build.hint = build_hint
+            self._hints.content = hint_spans([(self._build, build_hint), (self._execute, self._execute.hint)])
             notes = []
             if build_off is not None:  # one rule per button and mission state (console.session.mission_rules)
                 notes.append(f"Build mission is off: {build_off}")
@@ -225,6 +237,8 @@ class MissionView:
             colors = {"done": "green", "aborted": "gray", "failed": "red", "paused": "yellow", "failsafe": "red"}
             self._progress.color = colors.get(run.state, "blue")
             doing = f"{view.running}: " if view.running else ""
+            if view.running == "Return":  # where it lands: the take-off spot, not where the operator started
+                doing = f"{return_hint(view.launch)} · "
             self._status.content = (f"<small>{html.escape(doing)}<b>{html.escape(run.state)}</b>"
                                     f"{' · ' + html.escape(run.message) if run.message else ''}</small>"
                                     if shown else "")

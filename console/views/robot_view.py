@@ -27,8 +27,10 @@ import trimesh
 import viser
 
 from console.views.client_notice import tell
+from console.views.page_a11y import hint_spans
 from console.views.robot_messages import MessageShelf
-from console.session.operator_state import battery_text
+from console.session.button_rules import hover_text
+from console.session.operator_state import CommandState, battery_text
 from console.session.session import ROBOT, RUN, RobotSnapshot, Session, SessionError
 from console.session.vehicle_commands import LABELS, VehicleCommands
 from console.wording import mode_text
@@ -80,6 +82,8 @@ def robot_mesh() -> trimesh.Trimesh:
     parts.append(nose)
     return trimesh.util.concatenate(parts)
 
+
+_ON = CommandState(True, True, "")
 
 MESSAGES_SHOWN = 3
 """How many of the robot's latest status messages the panel shows."""
@@ -189,6 +193,7 @@ class RobotView:
         self._lock = threading.Lock()
         self._last = 0.0
         self._status = server.gui.add_markdown(status_text(None, link_name))
+        self._hover_note = server.gui.add_markdown("")  # hovering: the battery time left to land
         self._commands = commands
         self._buttons: dict[str, Any] = {}
         self._shown_commands: Any = None
@@ -196,12 +201,14 @@ class RobotView:
             icons = {"hold": viser.Icon.PLAYER_PAUSE, "land": viser.Icon.ARROW_BAR_TO_DOWN, "return": viser.Icon.HOME,
                      "disarm": viser.Icon.POWER, "control": viser.Icon.STEERING_WHEEL}
             colors = {"hold": "yellow", "land": "orange", "return": "blue", "disarm": "gray", "control": "red"}
+            launch = session.operator_state().launch
             for name, label in LABELS.items():
                 b = server.gui.add_button(label, color=colors[name], icon=icons[name], visible=False,
-                                          hint=f"Vehicle command: {label}")
+                                          hint=hover_text(name, label, _ON, launch))
                 b.on_click(lambda e, n=name: self._on_command(e, n))
                 self._buttons[name] = b
             self._why_not = server.gui.add_markdown("")
+            self._hints = server.gui.add_html("")  # the buttons' hover text, shown by the page script (page_a11y)
         self._frame = server.scene.add_frame("/robot", show_axes=False, visible=False)
         self._twin = server.scene.add_mesh_trimesh("/robot/twin", robot_mesh())
         self._stale_twin = server.scene.add_mesh_trimesh("/robot/twin_stale", stale_mesh(), visible=False)
@@ -268,20 +275,27 @@ class RobotView:
 
     def _show_commands(self) -> None:
         """Show the vehicle commands the session's rules allow now (only when that changes)."""
-        if not self._buttons:
-            return
-        states = self._session.operator_state().commands
-        key = tuple(sorted((n, c.shown, c.enabled, c.reason) for n, c in states.items()))
+        view = self._session.operator_state()
+        states = view.commands
+        key = (tuple(sorted((n, c.shown, c.enabled, c.reason) for n, c in states.items())), view.launch,
+               view.battery_note)
         with self._lock:
             if key == self._shown_commands:
                 return
             self._shown_commands = key
+            note = view.battery_note
+            self._hover_note.content = (f"<small style='color:#b35c00'><b>{html.escape(note)}</b></small>"
+                                        if note else "")
             for name, button in self._buttons.items():
-                c = states[name]
+                c = states[name]  # one rule per button (console.session.button_rules): the session refuses with it too
                 button.visible = c.shown
                 button.disabled = not c.enabled
-                button.hint = f"Vehicle command: {LABELS[name]}" + (f" (not now: {c.reason})" if c.reason else "")
-            off = sorted({c.reason for c in states.values() if c.shown and not c.enabled and c.reason})
+                button.hint = hover_text(name, LABELS[name], c, view.launch)
+            if not self._buttons:
+                return
+            self._hints.content = hint_spans((b, b.hint or "") for b in self._buttons.values())
+            off = sorted({c.reason for n, c in states.items() if c.shown and not c.enabled and c.reason
+                          and not (n == "hold" and c.reason.endswith("nothing to hold"))})  # that one: on hover only
             self._why_not.content = "".join(f"<small style='color:#b35c00'>{html.escape(r)}</small><br>" for r in off)
 
     def show(self, r: RobotSnapshot, force: bool = False) -> None:

@@ -53,12 +53,16 @@ def goto_entries(objects: Any) -> dict[str, str]:
 def summary_html(text: str) -> str:
     """The summary in a read-only text box with a button that copies it to the clipboard."""
     rows = min(8, max(3, text.count("\n") + 1))
-    copy_js = ("var t=this.parentNode.querySelector('textarea');t.select();"
-               "if(navigator.clipboard){navigator.clipboard.writeText(t.value);}else{document.execCommand('copy');}"
-               "this.textContent='Copied';var b=this;setTimeout(function(){b.textContent='Copy';},1500);")
+    # feedback that tells the truth: "Copied ✓" once the clipboard took it, else how to copy by hand
+    copy_js = ("var b=this,t=b.parentNode.querySelector('textarea');"
+               "var say=function(m){b.textContent=m;clearTimeout(b._mn);b._mn=setTimeout(function(){b.textContent='Copy';},2500);};"
+               "var old=function(){t.select();try{return document.execCommand('copy');}catch(e){return false;}};"
+               "var done=function(ok){say(ok?'Copied \u2713':'Copy failed: select the text, Ctrl+C');};"
+               "if(navigator.clipboard&&window.isSecureContext){navigator.clipboard.writeText(t.value)"
+               ".then(function(){done(true);},function(){done(old());});}else{done(old());}")
     return (f"<div><textarea readonly rows='{rows}' style='width:100%;font:11px/1.35 monospace;resize:vertical;"
             f"white-space:pre-wrap;box-sizing:border-box'>{html.escape(text)}</textarea>"
-            f"<button type='button' onclick=\"{html.escape(copy_js)}\" style='margin-top:4px'>Copy</button></div>")
+            f"<button type='button' aria-live='polite' onclick=\"{html.escape(copy_js)}\" style='margin-top:4px'>Copy</button></div>")
 
 
 class SceneSummaryView:

@@ -273,7 +273,8 @@ def test_abort_in_the_air_then_land_here_puts_the_robot_down_and_the_route_at_it
     assert s.mission is None  # the aborted mission is retired
     assert s.route_snapshot().goals[-1][:2] == pytest.approx((2.625, 5.625))  # the goal is kept, re-planned
     view = s.operator_state()
-    assert view.commands["land"].enabled and view.commands["return"].enabled and view.commands["hold"].enabled
+    assert view.commands["land"].enabled and view.commands["return"].enabled
+    assert not view.commands["hold"].enabled and "nothing to hold" in view.commands["hold"].reason  # hovering still
     from_air = s.build_mission()  # planning from the hover pose works
     assert from_air.kinds()[0] == "fly" and _near(from_air.segments[0].start, stack.pos)
     assert s.operator_state().execute_blocker is None
@@ -366,10 +367,13 @@ def test_the_panels_show_the_vehicle_commands_replan_and_landing_actions_the_rul
 
         s.set_robot(_ground(2.5, 0.7))
         assert not any(b.visible for b in buttons.values())
-        s.set_robot(_hover(2.5, 2.0, 1.5))
+        s.set_robot(_hover(2.5, 2.0, 1.5, mode="flying"))  # under way without a mission of the console's: Hold stops it
         assert usable() == {"hold": True, "land": True, "return": True, "disarm": False, "control": False}
+        s.set_robot(_hover(2.5, 2.0, 1.5))  # hovering still: nothing to hold (off, with the reason on hover)
+        assert usable() == {"hold": False, "land": True, "return": True, "disarm": False, "control": False}
+        assert "nothing to hold" in buttons["hold"].hint
         s.set_run(RunStatus("paused", 0, 0.2))
-        assert usable() == {"hold": True, "land": False, "return": False, "disarm": False, "control": False}
+        assert usable() == {"hold": False, "land": False, "return": False, "disarm": False, "control": False}
         assert buttons["land"].visible and "abort it first" in robot_view._why_not.content
         s.set_run(RunStatus("running", 0, 0.3))
         assert not any(b.visible for b in buttons.values())  # the mission's Pause / Abort drive it

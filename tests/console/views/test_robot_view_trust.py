@@ -167,9 +167,10 @@ def test_position_bound_vehicle_commands_are_off_with_the_reason(server: viser.V
     session.set_robot(_known())  # on the ground, disarmed: the launch spot
     session.set_robot(_known((2.5, 1.5, 1.2), armed=True, landed=False, mode=Mode.HOLDING))
     cmds = session.operator_state().commands
-    assert cmds["land"].enabled and cmds["return"].enabled and cmds["hold"].enabled
+    assert cmds["land"].enabled and cmds["return"].enabled
+    assert not cmds["hold"].enabled and "nothing to hold" in cmds["hold"].reason  # hovering still
 
-    session.set_robot(_unknown(armed=True, landed=False, mode=Mode.HOLDING))
+    session.set_robot(_unknown(armed=True, landed=False, mode=Mode.FLYING))  # the link's mode without a position in the air
     cmds = session.operator_state().commands
     assert cmds["hold"].shown and cmds["hold"].enabled  # Hold needs no position (BRAKE)
     for name in ("land", "return"):

@@ -67,7 +67,7 @@ def test_only_take_control_is_on_while_the_vehicle_flies_its_own_mode(server: vi
 
     session.set_robot(_snap())  # the console's own flight: no Take control
     cmds = session.operator_state().commands
-    assert cmds["hold"].enabled and not cmds["control"].shown
+    assert cmds["hold"].shown and not cmds["control"].shown
     assert not view._buttons["control"].visible
     with pytest.raises(SessionError, match="Take control applies only"):
         commands.run("control")

@@ -1,0 +1,107 @@
+"""How long the battery lasts in the air: the charge's measured drain rate and the time left to land.
+
+The console already has the battery rules (:mod:`console.session.operator_state`): below
+:data:`~console.session.operator_state.BATTERY_CRITICAL` a robot in the air is landed where it is. While
+the robot is in the air, :class:`DrainRate` fits a straight line (least squares, numpy) to the charge
+reports of the last :data:`WINDOW` seconds in the air, and :func:`time_left` is the time until the charge
+reaches the critical level at that rate: the time the operator has to land or Return before the console
+lands the robot by itself. A multirotor draws about the same power hovering as flying slowly, so the
+flight's own samples measure the hover drain.
+
+An estimate needs :data:`MIN_SPAN` seconds of samples in the air and a falling charge; until then (and
+with an unknown charge) there is none, and the panel says the drain is being measured. Times are the
+link's report stamps [s]; charges are fractions in [0, 1].
+"""
+
+from __future__ import annotations
+
+import math
+import threading
+from collections import deque
+
+import numpy as np
+
+from console.session.operator_state import BATTERY_CRITICAL
+
+WINDOW = 120.0
+"""How far back [s] the drain rate looks (charge reports in the air only)."""
+MIN_SPAN = 8.0
+"""Seconds [s] of charge reports in the air needed before an estimate is given."""
+STEP = 0.5
+"""Reports closer than this [s] to the last one kept are skipped (the link reports at tens of Hz)."""
+MAX_SAMPLES = 1000
+"""At most this many reports are kept."""
+MIN_RATE = 1e-5
+"""A drain below this [1/s] (full to empty in more than a day) is no drain: no time is given."""
+
+
+class DrainRate:
+    """The charge's drain rate [1/s] in the air, from the robot's reports (thread-safe)."""
+
+    def __init__(self, window: float = WINDOW, min_span: float = MIN_SPAN) -> None:
+        if not (math.isfinite(window) and window > 0):
+            raise ValueError(f"window: must be a finite number of seconds > 0, got {window!r}")
+        if not (math.isfinite(min_span) and 0 < min_span <= window):
+            raise ValueError(f"min_span: must be within 0..window ({window} s), got {min_span!r}")
+        self.window, self.min_span = float(window), float(min_span)
+        self._samples: deque[tuple[float, float]] = deque(maxlen=MAX_SAMPLES)
+        self._lock = threading.Lock()
+
+    def add(self, stamp: float, charge: float | None, airborne: bool) -> None:
+        """One report: its time [s], charge [0..1] or ``None``, and whether the robot is in the air.
+
+        On the ground the samples are dropped (a landing, a recharge or a battery swap starts over);
+        unknown or non-finite values are ignored."""
+        with self._lock:
+            if not airborne:
+                self._samples.clear()
+                return
+            if charge is None or not isinstance(charge, (int, float)) or not math.isfinite(charge) \
+                    or not math.isfinite(stamp):
+                return
+            if self._samples and stamp < self._samples[-1][0] + STEP:
+                return  # a repeat, an older report, or one too close to the last kept
+            if self._samples and charge > self._samples[-1][1] + 0.05:
+                self._samples.clear()  # the charge jumped up: another battery, start over
+            self._samples.append((float(stamp), float(charge)))
+            while self._samples and self._samples[-1][0] - self._samples[0][0] > self.window:
+                self._samples.popleft()
+
+    def rate(self) -> float | None:
+        """The drain [charge fraction per s, > 0], or ``None`` when not measured yet (too short, not falling)."""
+        with self._lock:
+            if len(self._samples) < 3 or self._samples[-1][0] - self._samples[0][0] < self.min_span:
+                return None
+            t, c = np.array(self._samples).T
+        slope = float(np.polyfit(t - t[0], c, 1)[0])
+        return -slope if -slope >= MIN_RATE else None
+
+
+def time_left(charge: float | None, rate: float | None, critical: float = BATTERY_CRITICAL) -> float | None:
+    """Seconds [s] until ``charge`` falls to ``critical`` at ``rate`` [1/s]; ``None`` when either is unknown."""
+    if charge is None or rate is None or not (math.isfinite(charge) and math.isfinite(rate)) or rate <= 0:
+        return None
+    return max(0.0, (float(charge) - critical) / rate)
+
+
+def minutes_text(seconds: float) -> str:
+    """``about 3 min`` (rounded), ``less than 1 min`` below a minute."""
+    if seconds < 60.0:
+        return "less than 1 min"
+    return f"about {round(seconds / 60.0):.0f} min"
+
+
+def hover_text(charge: float | None, rate: float | None, critical: float = BATTERY_CRITICAL) -> str:
+    """What the robot panel says about the battery while the robot hovers (plain text)."""
+    if charge is None or not isinstance(charge, (int, float)) or not math.isfinite(charge):
+        return "hovering: battery charge unknown, no time estimate"
+    left = time_left(charge, rate, critical)
+    if left is None:
+        return "hovering: measuring the battery drain for a time estimate…"
+    if left <= 0:
+        return f"hovering: battery at the critical level ({100 * critical:.0f} %): the robot lands now"
+    return (f"hovering: {minutes_text(left)} of battery left to land (the console lands the robot at "
+            f"{100 * critical:.0f} %)")
+
+
+__all__ = ["DrainRate", "MIN_RATE", "MIN_SPAN", "WINDOW", "hover_text", "minutes_text", "time_left"]

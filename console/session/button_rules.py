@@ -1,0 +1,124 @@
+"""One rule per vehicle-command button: whether it is on, and if not, why (the same words the session refuses with).
+
+The robot panel disables a button and shows the reason on hover from these functions; the session
+(:meth:`~console.session.operator_session.OperatorRules.land_mission`, ``return_mission``) and
+:class:`~console.session.vehicle_commands.VehicleCommands` refuse a click, an MCP call or a test's call
+with the reason from the *same* function, so the button and the refusal can never disagree.
+
+The base rules (link lost, position unknown or stale, a mission under way, the failsafe, the vehicle flying
+its own mode, unseen floor) are :func:`console.session.operator_state.vehicle_commands`; this module adds
+what a button would otherwise be refused for after the click:
+
+- **Land here** is off over a mapped obstacle (``desk 'desk-1' is below the robot at (2.50, 3.00)``) and over
+  space below the robot that the known space has not seen (:func:`~console.session.operator_state.landing_blocker`),
+  and, with its reason, on the ground (``the robot is not flying: nothing to land``; the button is hidden
+  there, but a call is refused with these words).
+- **Hold** is off while the robot stands or hovers: it is holding already (``nothing to hold``).
+- **Return** says where it lands (:func:`return_hint`): at the take-off spot, not where the operator started
+  the last mission.
+
+Frames and units: world frame (z up) [m].
+"""
+
+from __future__ import annotations
+
+from typing import Any, Mapping
+
+from planner.grid import PlanningGrid, Workspace
+
+from console.session import operator_state as rules
+from console.session.operator_state import CommandState
+from console.session.session_types import RobotSnapshot, RunStatus, Vec3, fmt_point
+
+HELD_MODES = frozenset({"idle", "holding"})
+"""Robot modes in which it is not moving (standing, or hovering in place): Hold has nothing to stop."""
+
+
+def _why_hidden(state: CommandState, robot: RobotSnapshot | None, run: RunStatus) -> CommandState:
+    """A hidden command keeps a reason for a call that comes anyway (the MCP door, a second tab)."""
+    if state.shown or state.reason:
+        return state
+    if robot is None:
+        return CommandState(False, False, "no state from the robot yet")
+    if run.state == "running":
+        return CommandState(False, False, "a mission is running: use Pause or Abort")
+    return state
+
+
+def land_here(robot: RobotSnapshot | None, run: RunStatus, ws: Workspace, launch: Vec3 | None,
+              grid: PlanningGrid | None, forced: bool = False) -> CommandState:
+    """Land here: shown while the robot is in the air; off (with the reason) when the session would refuse it.
+
+    ``forced`` (the critical-battery landing only): floor or space below that was not seen does not stop it
+    (a forced landing beats a crash); a mapped obstacle below still does.
+    """
+    base = rules.vehicle_commands(robot, run, ws, launch, None if forced else grid)["land"]
+    if robot is not None and not base.shown and not rules.airborne(robot, ws):
+        return CommandState(False, False, "the robot is not flying: nothing to land")
+    if not base.shown:
+        return _why_hidden(base, robot, run)
+    if not base.enabled or grid is None:
+        return base
+    why = rules.landing_blocker(robot, grid, forced)
+    if why is not None:
+        return CommandState(True, False, f"cannot land here: {why}")
+    return base
+
+
+def hold(robot: RobotSnapshot | None, run: RunStatus, ws: Workspace, launch: Vec3 | None) -> CommandState:
+    """Hold: off while the robot already stands or hovers in place (``nothing to hold``)."""
+    base = _why_hidden(rules.vehicle_commands(robot, run, ws, launch)["hold"], robot, run)
+    if robot is None or not base.shown or not base.enabled:
+        return base
+    mode = str(robot.mode)
+    if mode in HELD_MODES:
+        doing = "hovering" if rules.airborne(robot, ws) else "standing"
+        return CommandState(True, False, f"the robot is {doing} still already: nothing to hold")
+    return base
+
+
+def return_home(robot: RobotSnapshot | None, run: RunStatus, ws: Workspace, launch: Vec3 | None) -> CommandState:
+    """Return: off when there is nothing to return to (launch spot unknown, at it already) or it would be refused."""
+    return _why_hidden(rules.vehicle_commands(robot, run, ws, launch)["return"], robot, run)
+
+
+def return_hint(launch: Vec3 | None) -> str:
+    """What Return does, for its hover text and the mission panel: where it lands."""
+    if launch is None:
+        return "Return: lands at the take-off spot (not known yet: the robot was never seen standing disarmed)"
+    return f"Return: lands at the take-off spot {fmt_point((float(launch[0]), float(launch[1])))}"
+
+
+def vehicle_commands(robot: RobotSnapshot | None, run: RunStatus, ws: Workspace, launch: Vec3 | None,
+                     grid: PlanningGrid | None = None) -> dict[str, CommandState]:
+    """Every vehicle command's state (``hold``, ``land``, ``return``, ``disarm``, ``control``) by the rules above."""
+    out = dict(rules.vehicle_commands(robot, run, ws, launch, grid))
+    out["hold"] = hold(robot, run, ws, launch)
+    out["land"] = land_here(robot, run, ws, launch, grid)
+    out["return"] = return_home(robot, run, ws, launch)
+    return out
+
+
+def hover_text(name: str, label: str, state: CommandState, launch: Vec3 | None) -> str:
+    """A vehicle-command button's hover text: what it does, and why it is off (the session's own words)."""
+    does = return_hint(launch) if name == "return" else f"Vehicle command: {label}"
+    if state.enabled or not state.reason:
+        return does
+    why = state.reason if state.reason.startswith(f"{label} is off") else f"{label} is off: {state.reason}"
+    return f"{does} · {why}"
+
+
+def refusal(name: str, label: str, states: Mapping[str, Any]) -> str | None:
+    """Why the session refuses command ``name`` now (the words its button shows), or ``None`` when it applies."""
+    state = states.get(name)
+    if state is None:
+        return f"{label} is not a vehicle command"
+    if state.enabled:
+        return None
+    if not state.shown:
+        return state.reason or f"{label} applies only while the robot is armed or off the ground"
+    return f"{label} is not possible now: {state.reason}"
+
+
+__all__ = ["HELD_MODES", "hold", "hover_text", "land_here", "refusal", "return_hint", "return_home",
+           "vehicle_commands"]
