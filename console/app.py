@@ -34,6 +34,7 @@ from console.views.objects_view import ObjectsView
 from console.views.paths_view import PathsView
 from console.views.scene_summary_view import SceneSummaryView
 from console.views.client_notice import install_tab_rules, page_style, tell
+from console.views.page_a11y import install_page_a11y
 from console.views.robot_view import RobotView, is_alert
 from console.session.scene_watch import FrameError, NotReady, SceneWatcher, objects_to_world
 from console.wording import plural
@@ -316,6 +317,7 @@ class ConsoleApp:
         paths_holder: dict[str, PathsView] = {}
         gui.add_html(page_style(RIGHT_PANEL_PX))  # notifications bottom right; the "disconnected" banner
         install_tab_rules(server)  # a tab in the background reconnects too; notices forgotten with their tab
+        install_page_a11y(server)  # every field linked to its label; buttons show their hover text (console.views.page_a11y)
         from console.session.vehicle_commands import VehicleCommands
 
         self.commands = VehicleCommands(session, self.link, self.runner)  # also the agent's Hold / Land here / Return
