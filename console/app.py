@@ -38,7 +38,7 @@ from console.views.page_a11y import install_page_a11y
 from console.views.robot_view import RobotView, is_alert
 from console.session.scene_watch import FrameError, NotReady, SceneWatcher, objects_to_world
 from console.wording import plural
-from console.session.session import JOB, NOTICE, SESSION_FILE, JobStatus, Notice, Session, SessionError
+from console.session.session import JOB, NOTICE, SESSION_FILE, JobStatus, Notice, Session
 from console.session.session_types import robot_snapshot
 
 log = logging.getLogger(__name__)
@@ -362,7 +362,13 @@ class ConsoleApp:
             self.views["summary"] = SceneSummaryView(server, session)
             self._closers.append(self.views["summary"].close)
         with gui.add_folder("Session", expand_by_default=bool(session.status_text()[1])):
-            self._session_controls()
+            from console.views.redo_view import RedoView  # Redo beside the objects panel's Undo; Ctrl+(Shift+)Z
+
+            self.views["redo"] = RedoView(server, session, getattr(self.views["objects"], "_undo", None))
+            from console.views.session_files_view import SessionFilesView  # Save as / Load / Delete (ask first)
+
+            self.views["session_files"] = SessionFilesView(server, session)
+            self._show_session_status = self.views["session_files"].show_status
         camera = gui.add_panel()
         with camera.add_tab("Camera", viser.Icon.CAMERA):
             self.views["capture"] = CaptureView(server, session, colors=self.views["objects"].colors)
@@ -376,51 +382,6 @@ class ConsoleApp:
         camera.set_width(330)
         server.gui.main_panel.dock_right()
         server.gui.main_panel.set_width(RIGHT_PANEL_PX)
-
-    def _session_controls(self) -> None:
-        server, session = self.server, self.session
-        assert server is not None and session is not None
-        gui = server.gui
-        gui.add_markdown(f"<small>Folder: <code>{html.escape(str(session.folder))}</code></small>")
-        status = gui.add_markdown("")
-
-        def show_status() -> None:  # saving works or not, what the restore left out (session_store)
-            text, warn = session.status_text()
-            style = ' style="color:#d62728"' if warn else ""
-            status.content = f"<small{style}>{html.escape(text)}</small>"
-
-        self._show_session_status = show_status
-        show_status()
-        name = gui.add_text("Name", "snapshot", hint="A file name inside the session folder (.json is added)")
-        save = gui.add_button("Save as", icon=viser.Icon.DEVICE_FLOPPY)
-        load = gui.add_button("Load", icon=viser.Icon.FOLDER_OPEN)
-        listing = gui.add_markdown("")
-
-        def refresh() -> None:
-            saves = session.list_saves()
-            listing.content = ("<small>saved: " + ", ".join(f"<code>{html.escape(s)}</code>" for s in saves[:12])
-                               + "</small>") if saves else ""
-
-        @save.on_click
-        def _(event: Any) -> None:
-            try:
-                path = session.save(str(name.value))
-            except SessionError as exc:
-                tell(event.client, "Not saved", str(exc), "red")
-                return
-            tell(event.client, "Saved", f"{path.name} in the session folder", "green")
-            refresh()
-
-        @load.on_click
-        def _(event: Any) -> None:
-            try:
-                notes = session.load(str(name.value))
-            except SessionError as exc:
-                tell(event.client, "Not loaded", str(exc), "red")
-                return
-            tell(event.client, "Loaded", "; ".join(notes) or f"{name.value}", "green")
-
-        refresh()
 
     # --- events ---------------------------------------------------------------------------------------
     def _on_capture(self, event: Any) -> None:

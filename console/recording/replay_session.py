@@ -29,7 +29,7 @@ _REFUSED = (
     "register", "discard", "undo", "clear_route", "build_mission", "spawn", "delete_object", "move_object",
     "set_capture", "set_robot", "set_job", "set_run", "complete_mission", "mission_started", "mission_not_started",
     "mission_finished", "replan_from_robot", "add_landing", "land_mission", "return_mission", "save", "load",
-    "restore_last", "undo_edit", "attach_runner",
+    "restore_last", "undo_edit", "redo_edit", "delete_save", "next_capture_id", "attach_runner",
 )
 
 

@@ -1,15 +1,19 @@
-"""The last capture's files in the session folder: photo and depth image, and their metadata.
+"""The captures' files in the session folder: photo and depth image, and their metadata; capture ids.
 
 ``captures/<id>.jpg`` holds the RGB photo, ``captures/<id>_depth_mm.png`` the depth along the
 optical axis as 16-bit millimetres (0 = unknown). Poses are ``world <- camera`` (OpenCV optical
 frame) and ``world <- robot`` [m, quaternion xyzw].
+
+Capture ids are ``cap-0001``, ``cap-0002``, ... in the order of the session's captures, continuing
+after the highest number found in ``captures/`` (so a restart never gives an id twice); a photo from a
+folder keeps its file name after the number (``cap-0007-IMG_0412``).
 """
 
 from __future__ import annotations
 
 import re
 from pathlib import Path
-from typing import Any, Mapping
+from typing import Any, Iterable, Mapping
 
 import numpy as np
 
@@ -18,6 +22,29 @@ from pipeline.camera.geometry import Intrinsics, Pose
 from console.session.session_types import CaptureRecord, Detection
 
 CAPTURE_DIR = "captures"
+_NUMBERED = re.compile(r"^cap-(\d{1,9})(?:[-_.]|$)")
+
+
+def highest_capture_number(folder: Path, ids: Iterable[str] = ()) -> int:
+    """The highest capture number (``cap-0012...`` -> 12) among the files in ``folder/captures`` and
+    ``ids``; 0 when there is none (or the folder cannot be listed)."""
+    names = list(ids)
+    try:
+        names += [p.name for p in (folder / CAPTURE_DIR).iterdir()]
+    except OSError:
+        pass
+    found = [int(m.group(1)) for n in names if (m := _NUMBERED.match(n))]
+    return max(found, default=0)
+
+
+def numbered_capture_id(number: int, name: str = "", source: str = "") -> str:
+    """The id of the session's ``number``-th capture: ``cap-0012``, or ``cap-0012-<file name>`` for a
+    photo from a folder (``source == "captures-folder"``); a render or camera frame counter is left out
+    (it restarts with the link)."""
+    if isinstance(number, bool) or not isinstance(number, int) or number < 1:
+        raise ValueError(f"capture number: must be a whole number >= 1, got {number!r}")
+    stem = re.sub(r"[^A-Za-z0-9_\-]", "_", Path(name or "").stem)[:40] if source == "captures-folder" else ""
+    return f"cap-{number:04d}" + (f"-{stem}" if stem else "")
 
 
 def write_capture_files(folder: Path, rec: CaptureRecord) -> dict[str, Any]:

@@ -214,7 +214,7 @@ class MappingJob:
             def sub(f: float, text: str) -> None:
                 self._report(0.15 + 0.7 * max(0.0, min(1.0, f)), text)
 
-            cap_id = capture_id(shot)
+            cap_id = self._session.next_capture_id(shot.name, shot.source)  # unique across restarts
             try:
                 result = self.perceiver.perceive(shot, cap_id, sub)
             except MappingError:

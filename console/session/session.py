@@ -46,10 +46,10 @@ from pipeline.scene import SceneError, check_plausible
 from console.session.capture_files import CAPTURE_DIR
 from console.session.history import History, Undo
 from console.session.known_space_state import KnownSpaceSession
-from console.session import mission_rules
+from console.session import goal_rules, mission_rules
 from console.session.merge import merge_observations
 from console.session.operator_session import OperatorRules
-from console.views.picking import goal_on_plane, ray_plane
+from console.views.picking import click_goal, ray_plane
 from console.session.session_reads import SessionReads
 from console.session.session_store import SESSION_FILE, SESSION_VERSION, Persistence
 from console.session.session_types import (
@@ -115,6 +115,7 @@ class Session(SessionReads, Persistence, Undo, OperatorRules, KnownSpaceSession)
         self._outbox: list[Notice] = []  # notices raised under the lock, sent by the next _emit
         self._history = History()
         self._known = None  # known space (console.session.known_space_state): None until the first capture
+        self._run_start: Vec3 | None = None  # where the robot is during a run: the route start shown
         self._plan_unknown = "closed"
 
     # --- observers -----------------------------------------------------------------------------
@@ -182,9 +183,11 @@ class Session(SessionReads, Persistence, Undo, OperatorRules, KnownSpaceSession)
             return self._workspace.floor + (s.altitude if s.goal_mode == "altitude" else 0.0)
 
     # --- route -----------------------------------------------------------------------------------
-    def goal_from_ray(self, origin: Sequence[float], direction: Sequence[float]) -> Vec3:
-        """The goal a click ray picks: its hit with the floor or the chosen altitude (world [m])."""
-        return goal_on_plane(origin, direction, self.goal_height(), self._workspace)
+    def goal_from_ray(self, origin: Sequence[float], direction: Sequence[float], top_down: bool = False) -> Vec3:
+        """The goal a click ray picks: its hit with the floor or the chosen altitude (world [m]); in a
+        top view (``top_down``) the floor point under the cursor at the chosen altitude
+        (:func:`console.views.picking.click_goal`)."""
+        return click_goal(origin, direction, self.goal_height(), self._workspace, top_down)
 
     def add_goal(self, goal: Sequence[float]) -> PlanResult:
         """Plan a candidate from the last registered node (or the start) to ``goal`` (world [m]).
@@ -199,6 +202,8 @@ class Session(SessionReads, Persistence, Undo, OperatorRules, KnownSpaceSession)
             if why is not None:
                 return PlanResult(False, why)
             why = self._goal_problem_locked(g)  # type: ignore[arg-type]
+            if why is None:  # a goal where the route already is would make a 0 m mission
+                why = goal_rules.zero_length(g, self._route, self._workspace)  # type: ignore[arg-type]
             if why is not None:
                 return PlanResult(False, why)
             res = self._route.propose(g)
@@ -394,14 +399,17 @@ class Session(SessionReads, Persistence, Undo, OperatorRules, KnownSpaceSession)
         self._emit([(CAPTURE, record)])
 
     def set_robot(self, state: RobotSnapshot) -> None:
-        """Record the robot's live state; an idle route start follows the robot on the ground."""
+        """Record the robot's live state; an idle route start follows the robot, and during a run
+        (every kind, paused included) the start shown follows it too (:func:`goal_rules.run_start`)."""
         with self._lock:
             self._robot = state
             moved = self._sync_start_locked()
             if moved:
                 self._save_locked()
+            shown = goal_rules.run_start(state, self._run.active, self._workspace, self._run_start)
+            followed, self._run_start = shown != self._run_start, shown
         events: list[tuple[str, Any]] = [(ROBOT, state)]
-        if moved:
+        if moved or followed:
             events.append((ROUTE, None))
         self._emit(events)
 
@@ -421,6 +429,8 @@ class Session(SessionReads, Persistence, Undo, OperatorRules, KnownSpaceSession)
     def set_run(self, status: RunStatus) -> None:
         with self._lock:
             self._run = status
+            if not status.active:
+                self._run_start = None  # the route's own start is shown again
         self._emit([(RUN, status)])
 
     def complete_mission(self) -> None:

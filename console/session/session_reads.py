@@ -81,10 +81,11 @@ class SessionReads(SessionCore):
             return self._settings
 
     def route_snapshot(self) -> RouteSnapshot:
-        """The route as world points, for drawing."""
+        """The route as world points, for drawing; during a run its start is where the robot is."""
         with self._lock:
             r, g = self._route, self._grid
             segs = tuple(path_points(seg, g) for seg in r.registered)
             cand = r.candidate.points(g) if r.candidate is not None else None
             goals = tuple(tuple(float(v) for v in s[-1]) for s in segs if len(s))
-            return RouteSnapshot(r.start, segs, cand, r.candidate_goal, goals)  # type: ignore[arg-type]
+            running = getattr(self, "_run_start", None) if self._run.active else None
+            return RouteSnapshot(r.start if running is None else running, segs, cand, r.candidate_goal, goals)  # type: ignore[arg-type]

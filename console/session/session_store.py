@@ -31,7 +31,10 @@ from planner.grid import Workspace
 from planner.mission import Mission
 from planner.route import Route
 
-from console.session.capture_files import read_capture_files, write_capture_files
+from console.session.capture_files import (
+    highest_capture_number, numbered_capture_id, read_capture_files, write_capture_files,
+)
+from console.session.history_file import HISTORY_FILE, history_to_dict, read_history_file, write_history_file
 from console.session.session_core import SessionCore
 from console.session.session_parse import SESSION_VERSION, SavedSession, parse_saved
 from console.session.session_types import CaptureRecord, Notice, SessionError, Settings
@@ -72,9 +75,23 @@ def resolve_name(folder: Path, name: str) -> Path:
     return target
 
 
+class ConfirmNeeded(SessionError):
+    """An action that asks first: call again with the confirming flag once the operator agreed.
+
+    Attributes:
+        question: What to ask (``Overwrite 'before-flight'?``).
+        detail: What confirming does, in a sentence.
+        confirm: The label of the confirming button (``Save over it``).
+    """
+
+    def __init__(self, question: str, detail: str, confirm: str) -> None:
+        super().__init__(f"{question} {detail}")
+        self.question, self.detail, self.confirm = question, detail, confirm
+
+
 def list_saves(folder: Path) -> list[str]:
-    """Names of the session files in ``folder`` (newest first)."""
-    files = [p for p in folder.glob("*.json") if not p.name.startswith(".")]
+    """Names of the session files in ``folder`` (newest first; not the undo history)."""
+    files = [p for p in folder.glob("*.json") if not p.name.startswith(".") and p.name != HISTORY_FILE]
     files.sort(key=lambda p: p.stat().st_mtime, reverse=True)
     return [p.name for p in files]
 
@@ -103,6 +120,14 @@ def session_to_dict(
         "settings": {"goal_mode": settings.goal_mode, "altitude": settings.altitude},
         "last_capture": last_capture,
     }
+
+
+def _when(path: Path) -> str:
+    """When ``path`` was last written, local time (``2026-12-02 03:40``), or ``earlier`` if unknown."""
+    try:
+        return time.strftime("%Y-%m-%d %H:%M", time.localtime(path.stat().st_mtime))
+    except OSError:
+        return "earlier"
 
 
 def write_session_file(path: Path, data: dict[str, Any]) -> None:
@@ -197,9 +222,16 @@ class Persistence(SessionCore):
             data.update(self._known_json_locked())  # type: ignore[attr-defined]  # KnownSpaceSession
             return data
 
-    def save(self, name: str | None = None) -> Path:
-        """Write the session to ``session.json`` or to the typed ``name`` in the session folder."""
-        path = self.folder / SESSION_FILE if name is None else self.resolve_name(name)
+    def save(self, name: str | None = None, overwrite: bool = False) -> Path:
+        """Write the session to ``session.json`` or to the typed ``name`` in the session folder.
+
+        A named snapshot that exists already is kept unless ``overwrite``: :class:`ConfirmNeeded`
+        asks first (``Overwrite 'before-flight'?``)."""
+        path = self.folder / SESSION_FILE if name is None else self._snapshot_path(name)
+        if name is not None and path.exists() and not overwrite:
+            raise ConfirmNeeded(f"Overwrite '{path.stem}'?",
+                                f"A snapshot of that name was saved {_when(path)}; saving over it replaces it.",
+                                "Save over it")
         with self._lock:
             data = self.to_dict()
         try:
@@ -209,6 +241,35 @@ class Persistence(SessionCore):
 
             raise SessionError(f"cannot write {path.name}: "
                                f"{os_error_words(exc, path) if isinstance(exc, OSError) else exc}") from None
+        return path
+
+    def delete_save(self, name: str, confirmed: bool = False) -> str:
+        """Delete the named snapshot ``name`` from the session folder; returns its file name.
+
+        Asks first: without ``confirmed`` it raises :class:`ConfirmNeeded` (``Delete 'before-flight'?``).
+        Refuses the session's own ``session.json``, the undo history and files that are not sessions."""
+        path = self._snapshot_path(name)
+        if path.name == SESSION_FILE and path.parent == self.folder:
+            raise SessionError(f"{SESSION_FILE} is the session itself (saved after every change): it is not deleted here")
+        read_session_file(path, self.folder)  # missing, a folder, not JSON or not a session: refused, named
+        if not confirmed:
+            raise ConfirmNeeded(f"Delete '{path.stem}'?",
+                                f"The snapshot saved {_when(path)} is removed from the session folder; "
+                                "this cannot be undone.", "Delete")
+        try:
+            path.unlink()
+        except FileNotFoundError:
+            raise SessionError(f"no saved session {path.name!r} in {self.folder} (deleted in another tab?)") from None
+        except OSError as exc:
+            from pipeline.file_kind import os_error_words
+
+            raise SessionError(f"cannot delete {path.name}: {os_error_words(exc, path)}") from None
+        return path.name
+
+    def _snapshot_path(self, name: str) -> Path:
+        path = self.resolve_name(name)
+        if path.name == HISTORY_FILE and path.parent == self.folder:
+            raise SessionError(f"{HISTORY_FILE} holds the undo history: choose another name")
         return path
 
     @property
@@ -246,6 +307,44 @@ class Persistence(SessionCore):
         if self._last_save_error is not None:
             self._outbox.append(Notice("Saving again", f"{path.name} is written after every change again", "success"))
         self._last_save_error = None
+        self._save_history_locked()
+
+    _history_written = -1  # the history's version last written to history.json
+    _history_cache: dict[int, Any] | None = None
+
+    def _save_history_locked(self) -> None:
+        """Write the undo / redo history (``history.json``) when it changed since it was last written."""
+        if self._history.version == self._history_written:
+            return
+        if self._history_cache is None:
+            self._history_cache = {}
+        undo, redo = self._history.states()
+        try:
+            write_history_file(self.folder / HISTORY_FILE, history_to_dict(
+                undo, redo, self._workspace, self._margin, cache=self._history_cache))
+        except (OSError, TypeError, ValueError) as exc:  # the map is saved; only the history is not
+            log.error("cannot write the undo history %s: %s", HISTORY_FILE, exc)
+            return
+        self._history_written = self._history.version
+
+    def _restore_history_locked(self) -> list[str]:
+        """Read ``history.json`` back into the history; returns what could not be restored."""
+        undo, redo, problems = read_history_file(self.folder / HISTORY_FILE, self._workspace)
+        self._history.replace(undo, redo)
+        self._history_written = self._history.version
+        return problems
+
+    _capture_number: int | None = None  # the last capture number given (None: not looked up yet)
+
+    def next_capture_id(self, name: str = "", source: str = "") -> str:
+        """A new capture id, unique in this session folder across restarts (``cap-0013``: one past the
+        highest found in ``captures/`` and in ids already given; see :func:`numbered_capture_id`)."""
+        with self._lock:
+            if self._capture_number is None:
+                ids = [str(self._capture_meta.get("id", ""))] if isinstance(self._capture_meta, dict) else []
+                self._capture_number = highest_capture_number(self.folder, ids)
+            self._capture_number += 1
+            return numbered_capture_id(self._capture_number, name, source)
 
     def _store_capture_locked(self, rec: CaptureRecord) -> dict[str, Any] | None:
         """Write the capture's files; their metadata, or ``None`` (logged) if they cannot be stored."""
@@ -299,9 +398,11 @@ class Persistence(SessionCore):
             except SessionError:
                 problems.append("the file as it was could not be copied aside (read-only folder?)")
             log.error("the last session was restored in part: %s", "; ".join(problems))
+        with self._lock:  # Undo and Redo as they were before the restart (read before the first save)
+            history_problems = self._restore_history_locked()
         notes = self._apply_saved(saved, path.name, remember=None)
         with self._lock:
-            self._restore_problems = problems
+            self._restore_problems = problems + history_problems
         self._emit_all()
         return notes
 

@@ -5,7 +5,8 @@ layer) is the goal, and the candidate path from the last registered node appears
 mode the click goes through objects (their own click handler stands aside); objects are selected
 in select mode or with Shift held. A goal can also be typed (x, y, z) and the 3D view put in a top
 view. The panel holds the click mode, goal mode and Register / Discard / Undo / Clear. Goals above
-the floor get a drop line to it. The built mission is drawn by segment type (walk / take-off / fly
+the floor get a drop line to it. In a top view an altitude click is the floor point under the cursor
+at the goal height, and the Goal x / y / z fields follow every click. The built mission is drawn by segment type (walk / take-off / fly
 / land) with a legend. World frame, z up [m].
 """
 
@@ -24,7 +25,7 @@ from planner.mission import Mission, SegmentKind
 
 from console.session import operator_state as rules
 from console.views.client_notice import tell
-from console.views.picking import SELECT_MODIFIER, click_intent, drop_lines, top_view, typed_goal
+from console.views.picking import SELECT_MODIFIER, click_intent, drop_lines, looks_down, top_view, typed_goal
 from console.session.session import MISSION, ROUTE, RUN, SETTINGS, Session, SessionError
 from console.wording import kind_text, plural
 
@@ -142,12 +143,19 @@ class PathsView:
                          daemon=True).start()
 
     def goal_from_click(self, client: Any, origin: Any, direction: Any) -> bool:
-        """Plan a candidate to where the ray hits the goal plane; tell ``client`` if it fails."""
+        """Plan a candidate to where the ray picks a goal (in ``client``'s top view: the floor point
+        under the cursor, at the goal height); the Goal fields show the point. Tells ``client`` if it fails."""
+        cam = getattr(client, "camera", None)
         try:
-            goal = self._session.goal_from_ray(origin, direction)
+            top_down = cam is not None and looks_down(tuple(cam.position), tuple(cam.look_at))
+        except (AttributeError, TypeError, ValueError):  # a camera not reported yet: a view from the side
+            top_down = False
+        try:
+            goal = self._session.goal_from_ray(origin, direction, top_down=top_down)
         except SessionError as exc:
             tell(client, "No goal there", str(exc), "yellow", 7.0)
             return False
+        self.show_goal_fields(goal)
         res = self._session.add_goal(goal)
         if not res.ok:
             tell(client, "Goal not reachable", res.message, "yellow", 8.0)
@@ -158,6 +166,13 @@ class PathsView:
 
     def _on_typed_goal(self, event: Any) -> None:
         threading.Thread(target=self.goal_from_values, args=(event.client, self.typed_values()), daemon=True).start()
+
+    def show_goal_fields(self, goal: Any) -> None:
+        """Put a clicked goal (world [m]) into the Goal x / y / z fields (2 decimals, as typed)."""
+        for handle, v in zip(self._typed, goal):
+            text = f"{float(v):.2f}"
+            if str(handle.value) != text:
+                handle.value = text
 
     def typed_values(self) -> tuple[str, str, str]:
         """The goal's x, y, z fields as typed (text; checked by :func:`typed_goal`)."""

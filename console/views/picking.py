@@ -49,6 +49,36 @@ def goal_on_plane(origin: Sequence[float], direction: Sequence[float], z: float,
     return p
 
 
+TOP_DOWN_DEG = 10.0
+"""A 3D view looking within this angle [deg] of straight down counts as a top view for clicks."""
+
+
+def looks_down(position: Sequence[float], look_at: Sequence[float], tolerance_deg: float = TOP_DOWN_DEG) -> bool:
+    """Whether a camera at ``position`` looking at ``look_at`` (world [m]) looks (nearly) straight down."""
+    d = np.asarray(look_at, dtype=np.float64) - np.asarray(position, dtype=np.float64)
+    n = float(np.linalg.norm(d)) if d.shape == (3,) and np.all(np.isfinite(d)) else 0.0
+    if n < 1e-9:
+        return False
+    return float(-d[2] / n) >= math.cos(math.radians(tolerance_deg))
+
+
+def click_goal(origin: Sequence[float], direction: Sequence[float], z: float, workspace: Workspace,
+               top_down: bool = False) -> Vec3:
+    """The goal a click ray picks at height ``z`` (world [m]).
+
+    In a view from the side the goal is where the ray meets the plane at ``z`` (where the altitude layer
+    is drawn). In a top view (``top_down``, :func:`looks_down`) the operator points at the floor plan:
+    the goal is the floor point under the cursor, raised to ``z`` (the plane at ``z`` lies nearer the
+    camera, so its hit would land off the spot, towards the view's centre). Raises :class:`SessionError`
+    as :func:`goal_on_plane`.
+    """
+    floor = float(workspace.floor)
+    if top_down and z > floor:
+        x, y, _ = goal_on_plane(origin, direction, floor, workspace)
+        return (x, y, float(z))
+    return goal_on_plane(origin, direction, z, workspace)
+
+
 SELECT_MODIFIER = "shift"
 """Held while clicking an object, it selects the object even in goal mode."""
 

@@ -337,6 +337,6 @@ def test_the_undo_button_names_the_step_and_undoes_it(tmp_path: Path) -> None:
         view._on_undo(Click())  # nothing left: refused and said to the tab
         assert s.scene.objects == ()
         assert told == ["Undone: delete box-4", "Undone: spawn from file room.json",
-                        "Cannot undo: nothing to undo: no map edit since the console started"]
+                        "Cannot undo: nothing to undo: no map edit left in the history (the last 20 are kept)"]
     finally:
         server.stop()

@@ -1,0 +1,171 @@
+"""The undo and redo history on disk: ``history.json`` beside ``session.json``, so Undo and Redo
+survive a console restart.
+
+The file holds both stacks of :class:`~console.session.history.History`, oldest first. Each state is
+written in the session file's own format (scene, route, mission, last capture's metadata, known
+space; world frame [m]) and read back through the same checks
+(:func:`console.session.session_parse.parse_saved`), so a state that would not restore as a session
+is not put back either. Known spaces shared by several states are written once (``known_spaces``,
+referred to by index). The grid is not stored (it is rebuilt when a state is put back) and the
+capture's photo stays in ``captures/`` (its metadata names it).
+
+Bounded: at most :data:`~console.session.history.HISTORY_DEPTH` states a stack, and the oldest undo
+states are left out of the file once it would pass :data:`MAX_HISTORY_BYTES`.
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+from pathlib import Path
+from typing import Any, Sequence
+
+from pipeline.scene import scene_to_dict, write_text_atomic
+from planner.grid import Workspace
+
+from console.session.history import SceneState
+from console.session.session_parse import SESSION_VERSION, parse_saved
+from console.session.session_types import SessionError
+
+log = logging.getLogger(__name__)
+
+HISTORY_FILE = "history.json"
+HISTORY_KIND = "morphonavi-history"
+HISTORY_VERSION = 1
+MAX_HISTORY_BYTES = 40 * 1024 * 1024
+"""The history file stays under this size [bytes]: older undo states are left out of it (a map of
+10 000 objects is about 10 MB a state; the paper's room with its known space about 0.1 MB)."""
+
+
+def _state_dict(state: SceneState, workspace: Workspace, margin: float, known_ref: int | None) -> dict[str, Any]:
+    return {
+        "label": state.label,
+        "key": state.key,
+        "known_ref": known_ref,
+        "state": {
+            "version": SESSION_VERSION,
+            "kind": "morphonavi-session",
+            "frame": "world",
+            "workspace": {"min": list(workspace.min), "max": list(workspace.max), "resolution": workspace.resolution},
+            "margin": margin,
+            "scene": scene_to_dict(state.scene),
+            "route": state.route,
+            "mission": None if state.mission is None else state.mission.to_dict(),
+            "last_capture": state.capture_meta,
+        },
+    }
+
+
+def history_to_dict(undo: Sequence[SceneState], redo: Sequence[SceneState], workspace: Workspace, margin: float,
+                    max_bytes: int = MAX_HISTORY_BYTES, cache: dict[int, tuple[Any, dict[str, Any]]] | None = None,
+                    ) -> dict[str, Any]:
+    """Both stacks (oldest first) as the ``history.json`` dict, within ``max_bytes`` (oldest undo
+    states dropped first). ``cache`` (id of a known space -> (it, its dict)) saves compressing the same
+    known space again on every write; it is trimmed to the states given."""
+    cache = {} if cache is None else cache
+    spaces: list[dict[str, Any]] = []
+    index: dict[int, int] = {}
+    seen: set[int] = set()
+
+    def ref(known: Any) -> int | None:
+        if known is None:
+            return None
+        k = id(known)
+        seen.add(k)
+        if k not in index:
+            if k not in cache or cache[k][0] is not known:
+                cache[k] = (known, known.to_dict())
+            index[k] = len(spaces)
+            spaces.append(cache[k][1])
+        return index[k]
+
+    # newest first, so the size bound drops the oldest
+    redo_out = [_state_dict(s, workspace, margin, ref(s.known)) for s in reversed(redo)]
+    undo_out: list[dict[str, Any]] = []
+    size = sum(len(json.dumps(e)) for e in redo_out)
+    for s in reversed(undo):
+        entry = _state_dict(s, workspace, margin, ref(s.known))
+        size += len(json.dumps(entry)) + (len(json.dumps(spaces[-1])) if entry["known_ref"] == len(spaces) - 1 else 0)
+        if size > max_bytes and undo_out:
+            break
+        undo_out.append(entry)
+    for k in [k for k in cache if k not in seen]:
+        del cache[k]
+    return {"kind": HISTORY_KIND, "version": HISTORY_VERSION, "known_spaces": spaces,
+            "undo": undo_out[::-1], "redo": redo_out[::-1]}
+
+
+def write_history_file(path: Path, data: dict[str, Any]) -> None:
+    """Write a history dict atomically; raises ``OSError``, ``TypeError`` or ``ValueError``."""
+    write_text_atomic(path, json.dumps(data, allow_nan=False, separators=(",", ":")) + "\n")
+
+
+def read_history_file(path: Path, workspace: Workspace) -> tuple[list[SceneState], list[SceneState], list[str]]:
+    """The undo and redo states saved in ``path`` (oldest first) and what could not be read back.
+
+    A missing file gives empty stacks and no problem. A file that is not a history (or unreadable) gives
+    empty stacks and the reason; a state that fails the session checks is dropped with the one before it
+    (an undo goes back one step at a time, so the older ones stay reachable only through it).
+    """
+    if not path.exists():
+        return [], [], []
+    from pipeline.file_kind import MAX_BYTES
+
+    try:
+        if path.stat().st_size > MAX_BYTES["session"] + MAX_HISTORY_BYTES:
+            return [], [], [f"{path.name} is too large to read: the undo history starts empty"]
+        data = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
+        return [], [], [f"{path.name} could not be read ({exc}): the undo history starts empty"]
+    if not isinstance(data, dict) or data.get("kind") != HISTORY_KIND or data.get("version") != HISTORY_VERSION:
+        return [], [], [f"{path.name} is not a MorphoNavi undo history (version {HISTORY_VERSION}): "
+                        "the undo history starts empty"]
+    spaces = data.get("known_spaces")
+    spaces = spaces if isinstance(spaces, list) else []
+    problems: list[str] = []
+    known_cache: dict[int, Any] = {}
+
+    def states(name: str) -> list[SceneState]:
+        raw = data.get(name)
+        if not isinstance(raw, list):
+            problems.append(f"{path.name}: {name}: must be a list: none restored")
+            return []
+        out: list[SceneState] = []
+        for i, entry in enumerate(raw):
+            try:
+                out.append(_state_from(entry, spaces, workspace, known_cache, f"{path.name}: {name}[{i}]"))
+            except SessionError as exc:
+                problems.append(f"{exc}: the undo history before it was dropped" if name == "undo"
+                                else f"{exc}: the redo history was dropped")
+                out = [] if name == "undo" else out
+                if name == "redo":
+                    return []
+        return out
+
+    return states("undo"), states("redo"), problems
+
+
+def _state_from(entry: Any, spaces: list[Any], workspace: Workspace, known_cache: dict[int, Any],
+                where: str) -> SceneState:
+    if not isinstance(entry, dict):
+        raise SessionError(f"{where}: must be an object")
+    label, key = entry.get("label"), entry.get("key", "")
+    if not isinstance(label, str) or not label or not isinstance(key, str):
+        raise SessionError(f"{where}.label: must be a non-empty text")
+    state = entry.get("state")
+    if not isinstance(state, dict):
+        raise SessionError(f"{where}.state: must be an object")
+    ref = entry.get("known_ref")
+    if ref is not None:
+        if not isinstance(ref, int) or isinstance(ref, bool) or not 0 <= ref < len(spaces):
+            raise SessionError(f"{where}.known_ref: must be an index into known_spaces (0..{len(spaces) - 1}), got {ref!r}")
+        state = dict(state, known_space=spaces[ref])
+    saved = parse_saved(state, where, workspace)
+    if saved.problems or saved.notes:
+        raise SessionError(f"{where}: " + "; ".join(saved.problems + saved.notes))
+    if saved.route is None:
+        raise SessionError(f"{where}.state.route: missing")
+    known = saved.known
+    if ref is not None:  # one known space object per saved one, shared as when it was written
+        known = known_cache.setdefault(ref, known)
+    return SceneState(label, saved.scene, None, saved.route, saved.mission, None, saved.last_capture, key, known)

@@ -1,0 +1,71 @@
+"""Redo beside Undo, and the keyboard: Ctrl+Z undoes, Ctrl+Shift+Z redoes (Cmd on a Mac).
+
+The Undo button belongs to the objects panel (:class:`console.views.objects_view.ObjectsView`); the
+Redo button is placed right after it (viser orders a container's elements by ``order``), and both
+keys are viser commands (also listed in its command palette, Ctrl+K). The session does the work
+(:meth:`console.session.session.Session.undo_edit` / ``redo_edit``); the button shows what a redo
+puts back (``Redo move box-3``) and is off when there is nothing to redo.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import viser
+
+from console.session.session import CAPTURE, MISSION, ROUTE, SCENE, Session, SessionError
+from console.views.client_notice import tell
+
+LABEL_CHARS = 40
+"""The button's label is cut to this many characters (the panel's width)."""
+
+
+class RedoView:
+    """The Redo button (after ``undo_button`` when given) and the Undo / Redo keys.
+
+    Args:
+        server: The viser server (the button goes into the current GUI container).
+        session: The session whose edits are undone and redone.
+        undo_button: The Undo button to sit beside (its ``order``), or ``None`` (next in the container).
+    """
+
+    def __init__(self, server: viser.ViserServer, session: Session, undo_button: Any = None) -> None:
+        self._session = session
+        order = getattr(undo_button, "order", None)
+        self.button = server.gui.add_button(
+            "Redo", icon=viser.Icon.ARROW_FORWARD_UP, color="gray", disabled=True,
+            hint="Put back the edit Undo took away (Ctrl+Shift+Z); a new edit clears it",
+            order=None if order is None else float(order) + 0.5)
+        self.button.on_click(lambda e: self.redo(e.client))
+        self._keys = [
+            server.gui.add_command("Undo map edit", description="Undo the last spawn, move, delete, capture or load",
+                                   hotkey="Z", modifier="cmd/ctrl", icon=viser.Icon.ARROW_BACK_UP),
+            server.gui.add_command("Redo map edit", description="Put back the edit Undo took away",
+                                   hotkey="Z", modifier="cmd/ctrl+shift", icon=viser.Icon.ARROW_FORWARD_UP),
+        ]
+        self._keys[0].on_trigger(lambda e: self.undo(e.client))
+        self._keys[1].on_trigger(lambda e: self.redo(e.client))
+        session.subscribe(self._on_event)
+        self.sync()
+
+    def sync(self) -> None:
+        """Show what Redo would put back, or turn it off."""
+        what = self._session.redo_label
+        self.button.disabled = what is None
+        self.button.label = "Redo" if what is None else f"Redo {what}"[:LABEL_CHARS]
+
+    def undo(self, client: Any) -> None:
+        try:
+            tell(client, "Undone", self._session.undo_edit().removeprefix("undone: "), "blue")
+        except SessionError as exc:
+            tell(client, "Cannot undo", str(exc), "red")
+
+    def redo(self, client: Any) -> None:
+        try:
+            tell(client, "Redone", self._session.redo_edit().removeprefix("redone: "), "blue")
+        except SessionError as exc:
+            tell(client, "Cannot redo", str(exc), "red")
+
+    def _on_event(self, topic: str, _payload: Any) -> None:
+        if topic in (SCENE, CAPTURE, ROUTE, MISSION):
+            self.sync()
