@@ -39,6 +39,7 @@ from pipeline.models.nms import nms
 from pipeline.ranging.photo_floor import floor_pass
 from pipeline.ranging.placement import heading_in_frame
 from pipeline.ranging.ranger import MappedObject, Ranger
+from pipeline.ranging.reasons import down_weight_reasons
 from pipeline.scene import Capture, Scene, SceneObject, Source
 from pipeline.segment_policy import mask_wanted
 from pipeline.stage_progress import StageCallback, stage_reporter
@@ -334,6 +335,7 @@ class Mapper:
                         mask_area=obj.mask_area,
                         distances=_distances(obj),
                         positions={"camera": _vec(c_cam), "robot": _vec(c_robot)},
+                        down_weighted=down_weight_reasons(obj),
                     ),
                     # exact depth (a simulator's ground truth): no sigma; the map fusion's own model, tested
                     # on that simulator, applies (see pipeline.mapping.observation_sigma)

@@ -29,6 +29,8 @@ def _source_to_dict(s: Source) -> dict[str, Any]:
         out["distances"] = {k: (None if v is None else round(v, 4)) for k, v in s.distances.items()}
     if s.positions:
         out["positions"] = {k: [round(c, 4) for c in v] for k, v in s.positions.items()}
+    if s.down_weighted:
+        out["down_weighted"] = [{"cue": c, "why": w} for c, w in s.down_weighted]
     return out
 
 
@@ -227,7 +229,21 @@ def _source_from(r: _Reader) -> Source:
         mask_area=None if area is None else int(area),
         distances=r.number_map("distances", nullable=True),
         positions=positions,
+        down_weighted=_reasons_from(r.raw("down_weighted", required=False) or [], f"{r.path}.down_weighted"),
     )
+
+
+def _reasons_from(raw: Any, path: str) -> tuple[tuple[str, str], ...]:
+    """``source.down_weighted``: a list of ``{"cue": str, "why": str}``."""
+    if not isinstance(raw, list):
+        raise SceneError(path, "must be a list of {cue, why} objects")
+    out = []
+    for i, item in enumerate(raw):
+        if not (isinstance(item, dict) and isinstance(item.get("cue"), str) and item["cue"]
+                and isinstance(item.get("why"), str)):
+            raise SceneError(f"{path}[{i}]", "must be an object with a non-empty string 'cue' and a string 'why'")
+        out.append((item["cue"], item["why"]))
+    return tuple(out)
 
 
 def scene_from_dict(data: Any) -> Scene:

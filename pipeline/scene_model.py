@@ -43,6 +43,8 @@ class Source:
             ``ground_contact_bound`` (that reading taken only as an upper bound: a nearer object may
             hide the contact) (``None`` where not available).
         positions: The object's centre in the other frames, keyed by frame name [m].
+        down_weighted: Why distance cues were trusted less than usual, ``(cue, why)`` pairs (``cue``:
+            ``size_prior``, ``ground_contact``, ``depth`` or ``fused``; :mod:`pipeline.ranging.reasons`).
     """
 
     capture: str | None = None
@@ -51,6 +53,7 @@ class Source:
     mask_area: int | None = None
     distances: Mapping[str, float | None] = field(default_factory=dict)
     positions: Mapping[str, Vec3] = field(default_factory=dict)
+    down_weighted: tuple[tuple[str, str], ...] = ()
 
 
 @dataclass(frozen=True)

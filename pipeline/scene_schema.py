@@ -45,6 +45,16 @@ _SOURCE = {
         "positions": {"type": "object", "propertyNames": {"enum": list(FRAMES)},
                       "additionalProperties": _vec(3, "centre in that frame [m]"),
                       "description": "the object's centre in the other frames [m]"},
+        "down_weighted": {
+            "type": "array",
+            "description": "why distance cues were trusted less than usual for this object (absent: none was)",
+            "items": {"type": "object", "required": ["cue", "why"], "properties": {
+                "cue": {"type": "string", "minLength": 1,
+                        "description": "size_prior, ground_contact, depth, or fused (the fused sigma itself)"},
+                "why": {"type": "string", "description": "a short phrase, e.g. 'box 1.40x wider for its height "
+                                                         "than the class can look'"},
+            }},
+        },
     },
 }
 

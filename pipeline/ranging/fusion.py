@@ -49,12 +49,15 @@ class Cue:
         distance: Optical-axis depth of the object's centre [m] (camera frame z), > 0.
         sigma: Its 1-sigma [m], > 0.
         note: How it was obtained (for the debug output and the bench).
+        down_weighted: Why its sigma was widened beyond the cue's own error model (an implausible box,
+            a border cut, a floor at odds with the given pose), in a few words; empty when it was not.
     """
 
     name: str
     distance: float
     sigma: float
     note: str = ""
+    down_weighted: str = ""
 
     def __post_init__(self) -> None:
         for key in ("distance", "sigma"):

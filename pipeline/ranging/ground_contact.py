@@ -70,6 +70,9 @@ class GroundModel:
     floor: FloorEstimate | None = None
     """The floor as fitted from the photo (:mod:`pipeline.camera.floor_fit`); when set, its covariance of
     (pitch, roll, ln H) replaces ``sigma_pitch`` and ``sigma_height`` in the contact's sigma."""
+    widened: str = ""
+    """Why this floor is less certain than the given pose says (the photo disagrees with it, the ground
+    under the objects is uneven); the contact cue carries it as its ``down_weighted`` reason."""
 
     def __post_init__(self) -> None:
         g = np.asarray(self.gravity_cam, dtype=np.float64).reshape(-1)
@@ -186,7 +189,7 @@ def ground_contact_cue(
     sigma = math.sqrt(sum(v * v for v in dz))
     note = (f"floor at {float(np.linalg.norm(p)):.2f} m under the box bottom (row {y2:.0f}), camera {H:.2f} m up; "
             f"sigma: pitch/pixel {dz[0]:.2f} m, height {dz[1]:.2f} m, footprint {dz[2]:.2f} m")
-    return Cue("ground_contact", z, max(sigma, 1e-3), note), c
+    return Cue("ground_contact", z, max(sigma, 1e-3), note, ground.widened), c
 
 
 def border_bound(

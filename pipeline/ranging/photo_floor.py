@@ -111,10 +111,11 @@ def depth_plane(depth_m: np.ndarray | None, intr: Intrinsics, prior_gravity: Seq
     return plane_from_depth(depth_m, intr, prior_gravity, excl)
 
 
-def _ground(base: GroundModel | None, floor: FloorEstimate, sigma_floor: float, sigma_px: float) -> GroundModel:
+def _ground(base: GroundModel | None, floor: FloorEstimate, sigma_floor: float, sigma_px: float,
+            widened: str = "") -> GroundModel:
     return GroundModel(floor.gravity_cam, floor.camera_height, sigma_floor=sigma_floor, sigma_px=sigma_px,
-                       floor=floor, **({} if base is None else {"sigma_pitch": base.sigma_pitch,
-                                                                 "sigma_height": base.sigma_height}))
+                       floor=floor, widened=widened, **({} if base is None else {"sigma_pitch": base.sigma_pitch,
+                                                                                  "sigma_height": base.sigma_height}))
 
 
 def floor_spread(contacts: Sequence[Contact], gravity_cam: Sequence[float], camera_height: float,
@@ -179,7 +180,8 @@ def decide_floor(objects: Sequence[object], intr: Intrinsics, given: GroundModel
                 return FloorDecision(None, [given] * n, fit,
                                      f"camera pose given; the photo agrees ({dis:.1f} sigma): {fit.note}")
             wider = GroundModel(given.gravity_cam, given.camera_height, given.sigma_pitch, given.sigma_height,
-                                local, given.sigma_px)
+                                local, given.sigma_px,
+                                widened=f"the ground under the photo's objects is +-{local:.2f} m off its plane")
             return FloorDecision(None, [wider] * n, fit, (
                 f"camera pose given; the photo agrees ({dis:.1f} sigma), but the ground under the objects is "
                 f"+-{local:.2f} m off its plane: ground-contact sigma widened ({fit.note})"), remeasure=True, contacts=idx)
@@ -196,7 +198,8 @@ def decide_floor(objects: Sequence[object], intr: Intrinsics, given: GroundModel
                    f"floor (given {given.camera_height:.2f} m), from {fit.n_contacts} object contact"
                    f"{'s' if fit.n_contacts != 1 else ''}{' and the depth map' if fit.plane else ''}; "
                    "ground contact down-weighted")
-        ground = _ground(given, widened, given.sigma_floor, given.sigma_px)
+        ground = _ground(given, widened, given.sigma_floor, given.sigma_px,
+                         f"the photo's floor disagrees with the given camera pose by {dis:.1f} sigma")
         return FloorDecision(None, [ground] * n, fit, f"camera pose given; {warning}", warning, remeasure=True,
                              contacts=idx)
     # --- no pose: the photo's floor ----------------------------------------------------------------

@@ -88,11 +88,14 @@ def size_prior_cue(
     z = float(estimate.center[2])
     if not (math.isfinite(z) and z > 0):
         raise DistanceError(f"estimate.center: depth must be > 0 [m], got {z!r}")
+    why: list[str] = []
     if not trunc.vertical_cut:
         px = y2 - y1
         rel = math.hypot(sh, max(sigma_px, 0.02 * px) / px)
         how = f"height {h:.2f} m +-{sh:.0%} over {px:.0f} px"
     else:
+        cut = " and ".join(s for s, c in (("top", trunc.top), ("bottom", trunc.bottom)) if c)
+        why.append(f"{cut} cut by the image border: its width across the view used, not its height")
         px = x2 - x1
         mean, sd = horizontal_extent_stats(w, l)
         s_wl = math.hypot(sw * w, sl * l) * 2.0 / math.pi / mean
@@ -107,7 +110,8 @@ def size_prior_cue(
             sigma = math.hypot(sigma, z * math.log(k))
             how += (f"; size prior down-weighted: the box is {k:.2f}x wider for its height than the class can look "
                     "(crouching, sitting, partly hidden or a box around more than the object)")
-    return Cue("size_prior", z, sigma, how)
+            why.append(f"box {k:.2f}x wider for its height than the class can look")
+    return Cue("size_prior", z, sigma, how, "; ".join(why))
 
 
 ASPECT_SIGMAS = 2.0

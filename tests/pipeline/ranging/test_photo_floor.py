@@ -60,6 +60,9 @@ def test_a_wrong_given_pose_is_named_and_only_widens_the_contact() -> None:
     plain = ground_contact_cue(box, Truncation(), given, INTR, 0.4, 0.1, 0.87)[0]
     wide = ground_contact_cue(box, Truncation(), widened, INTR, 0.4, 0.1, 0.87)[0]
     assert wide.distance == pytest.approx(plain.distance) and wide.sigma > 2 * plain.sigma
+    # the scene file's reason for this cue (source.down_weighted)
+    assert not plain.down_weighted and wide.down_weighted.startswith("the photo's floor disagrees with the given "
+                                                                     "camera pose by ")
 
 
 def test_without_a_pose_the_floor_comes_from_the_other_objects() -> None:
