@@ -72,8 +72,8 @@ def hold(robot: RobotSnapshot | None, run: RunStatus, ws: Workspace, launch: Vec
         return base
     mode = str(robot.mode)
     if mode in HELD_MODES:
-        doing = "hovering" if rules.airborne(robot, ws) else "standing"
-        return CommandState(True, False, f"the robot is {doing} still already: nothing to hold")
+        doing = "hovers in place" if rules.airborne(robot, ws) else "stands still"
+        return CommandState(True, False, f"the robot already {doing}: nothing to hold")
     return base
 
 

@@ -101,11 +101,11 @@ def test_hold_is_off_while_the_robot_stands_or_hovers_still(tmp_path: Path) -> N
     commands = VehicleCommands(s, link, _Runner())
     s.set_robot(_snap(OVER_FLOOR, Mode.HOLDING))
     hold = s.operator_state().commands["hold"]
-    assert hold.shown and not hold.enabled and hold.reason == "the robot is hovering still already: nothing to hold"
-    with pytest.raises(SessionError, match="Hold is not possible now: the robot is hovering still already"):
+    assert hold.shown and not hold.enabled and hold.reason == "the robot already hovers in place: nothing to hold"
+    with pytest.raises(SessionError, match="Hold is not possible now: the robot already hovers in place"):
         commands.run("hold")
     s.set_robot(_snap((2.0, 2.5, 0.0), Mode.IDLE, armed=True))
-    assert s.operator_state().commands["hold"].reason == "the robot is standing still already: nothing to hold"
+    assert s.operator_state().commands["hold"].reason == "the robot already stands still: nothing to hold"
     assert link.calls == []
     s.set_robot(_snap(OVER_FLOOR, Mode.FLYING))  # under way (another station's command): Hold stops it
     assert s.operator_state().commands["hold"].enabled
