@@ -16,7 +16,8 @@ own message for page scripts, kept for tabs that connect later) that, whenever t
 
 1. gives every input whose ``<label for>`` does not reach it ``aria-labelledby`` = that label (the label gets
    an id) — the standard ARIA link, so the accessible name is the label's text;
-2. copies each button's hover text from a hidden ``<span data-mn-hint-for=UUID>`` (written by the views with
+2. copies each button's hover text from a hidden, empty ``<span data-mn-hint-for=UUID data-mn-hint=TEXT>`` (an
+   attribute, so the page's text is unchanged; written by the views with
    :func:`hint_spans`, through viser's normal GUI state, so every tab shows the current text) into the
    button's ``title`` (the browser's hover tooltip, also on a disabled button) and ``aria-description``.
 
@@ -49,7 +50,7 @@ if (!window.__morphonaviA11y) {
   const showHints = () => {
     document.querySelectorAll('[data-mn-hint-for]').forEach((span) => {
       const button = document.getElementById(span.getAttribute('data-mn-hint-for'));
-      const text = span.textContent || '';
+      const text = span.getAttribute('data-mn-hint') || '';
       if (!button || button.getAttribute('title') === text) return;
       button.setAttribute('title', text);
       button.setAttribute('aria-description', text);
@@ -83,8 +84,8 @@ def element_id(handle: Any) -> str:
 
 def hint_spans(hints: Iterable[tuple[Any, str]]) -> str:
     """Hidden HTML that carries each button's hover text to the page script: ``(handle, text)`` pairs."""
-    return "".join(f"<span hidden data-mn-hint-for=\"{html.escape(element_id(h))}\">{html.escape(text)}</span>"
-                   for h, text in hints)
+    return "".join(f"<span hidden data-mn-hint-for=\"{html.escape(element_id(h))}\" data-mn-hint=\"{html.escape(text)}\">"
+                   "</span>" for h, text in hints)
 
 
 __all__ = ["PAGE_SCRIPT", "element_id", "hint_spans", "install_page_a11y"]
