@@ -24,6 +24,7 @@ from planner.route import path_points
 
 from console.session import button_rules, mission_rules
 from console.session import operator_state as rules
+from console.session import search_landing
 from console.session.battery_estimate import DrainRate, hover_text
 from console.session.session_types import Notice, RunStatus, SessionError, Vec3
 from console.session.topics import MISSION, ROUTE, RUN
@@ -43,7 +44,7 @@ class OperatorView:
         air_end: Height above the floor [m] at which the mission ends in the air, or ``None``.
         running: Name of the vehicle command being flown (``Land here``, ``Return``), or ``""``.
         launch: Where Return goes (the floor spot the robot last stood on disarmed), or ``None``.
-        battery_note: While the robot hovers with no mission under way, the battery time left to land
+        battery_note: While the robot hovers with no mission running (none, ended, or paused), the battery time left to land
             (:func:`console.session.battery_estimate.hover_text`), else ``""``.
     """
 
@@ -80,8 +81,22 @@ class OperatorRules:
     _battery_land: Callable[[], None] | None = None  # ends the run and lands here (VehicleCommands)
     _battery_warned = 0  # the battery level last warned about: 0 ok, 1 low, 2 critical
     _battery_acting = False  # the critical-battery landing was started (once per flight)
+    _land_nearest = False  # a search runs: Land here lands on the nearest seen-free floor (search_landing)
 
     # --- wiring --------------------------------------------------------------------------------
+    def set_land_nearest(self, on: bool) -> None:
+        """While a search runs (``on``), Land here over floor not seen free or over an obstacle lands on the
+        nearest seen-free floor instead of being refused (:mod:`console.session.search_landing`)."""
+        with self._lock:  # type: ignore[attr-defined]
+            self._land_nearest = bool(on)
+
+    def _land_choice_locked(self, commands: Mapping[str, rules.CommandState]) -> Mapping[str, rules.CommandState]:
+        """The vehicle commands, with Land here as a search lands (see :meth:`set_land_nearest`)."""
+        if not self._land_nearest or self._robot is None:  # type: ignore[attr-defined]
+            return commands
+        return search_landing.land_elsewhere_state(commands, self._robot, self._run, self._workspace,  # type: ignore[attr-defined]
+                                                   self._launch, self._grid)  # type: ignore[attr-defined]
+
     def attach_runner(self, abort: Callable[[], None]) -> None:
         """Give the session the way to end the run an edit retires (the mission manager's abort)."""
         self._abort_run = abort
@@ -106,10 +121,11 @@ class OperatorRules:
                        and run.active else None)
             if retired is None and run.active and self._running is not None and not self._running.command:
                 retired = rules.battery_blocker(robot)  # low battery: the operator's mission does not resume
-            hovering = (robot is not None and not run.active and rules.airborne(robot, ws)
+            hovering = (robot is not None and run.state != "running" and rules.airborne(robot, ws)
                         and robot.mode in button_rules.HELD_MODES)
             return OperatorView(note, blocker, retired,
-                                button_rules.vehicle_commands(robot, run, ws, self._launch, self._grid),  # type: ignore[attr-defined]
+                                self._land_choice_locked(button_rules.vehicle_commands(robot, run, ws, self._launch,
+                                                                                self._grid)),  # type: ignore[attr-defined]
                                 rules.ends_in_air(self._mission, ws),  # type: ignore[attr-defined]
                                 self._running.command if self._running is not None and run.active else "",
                                 self._launch,
@@ -364,6 +380,12 @@ class OperatorRules:
         only): land even on floor not seen (a forced landing beats a crash)."""
         with self._lock:  # type: ignore[attr-defined]
             r, ws = self._robot, self._workspace  # type: ignore[attr-defined]
+            if self._land_nearest and not forced and r is not None and \
+                    rules.vehicle_commands(r, self._run, ws, self._launch, None)["land"].enabled:  # type: ignore[attr-defined]
+                m = search_landing.land_elsewhere_mission(r, self._grid, self._route, ws,  # type: ignore[attr-defined]
+                                                          f"land-{uuid.uuid4().hex[:6]}")
+                if m is not None:  # a search: over unseen floor or an obstacle, land on the nearest seen-free spot
+                    return m
             # one rule for the button and this refusal (console.session.button_rules): obstacle or unseen space below,
             # not flying, link or position lost, a mission under way
             state = button_rules.land_here(r, self._run, ws, self._launch, self._grid, forced)  # type: ignore[attr-defined]

@@ -78,3 +78,7 @@ def test_the_session_says_the_time_left_while_the_robot_hovers_after_a_mission(t
     note = s.operator_state().battery_note
     # (0.75 - 0.10) / 0.0025 per s = 260 s: about 4 min
     assert note == "hovering: about 4 min of battery left to land (the console lands the robot at 10 %)"
+    s.set_run(RunStatus("paused", 0, 0.5))  # a paused mission: the robot hovers, the operator decides
+    assert s.operator_state().battery_note == note
+    report(40.0, (2.0, 2.5, 0.0), Mode.IDLE, 0.70, True)  # landed
+    assert s.operator_state().battery_note == ""
