@@ -12,12 +12,16 @@ from typing import Any, Callable
 
 import viser
 
+ABOVE_NOTICES = ("<style>.mantine-Modal-overlay, .mantine-Modal-inner { z-index: 10000 !important; }</style>")
+"""The question stays above the notices stacked over the 3D view (they would cover its buttons)."""
+
 
 def ask(client: Any, question: str, detail: str, confirm: str, on_confirm: Callable[[], None],
         color: str = "red") -> Any:
     """Show ``question`` (the modal's title) and ``detail`` to ``client``; ``on_confirm`` runs (on the
     GUI thread pool) when the operator presses ``confirm``; Cancel just closes. Returns the modal."""
     with client.gui.add_modal(question) as modal:
+        client.gui.add_html(ABOVE_NOTICES)
         client.gui.add_markdown(html.escape(detail))
         yes = client.gui.add_button(confirm, color=color, icon=viser.Icon.CHECK)
         no = client.gui.add_button("Cancel", icon=viser.Icon.X)
