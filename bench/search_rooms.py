@@ -60,6 +60,8 @@ FURNITURE: list[tuple[str, tuple[float, float, float]]] = [
     ("barrel", (0.58, 0.88, 0.58)), ("plant", (0.4, 0.8, 0.4)), ("trash_bin", (0.4, 0.65, 0.4)),
 ]
 """Catalog classes with their catalog sizes ``(w, h, l)`` [m]."""
+KEEP_CLEAR = 0.8
+"""Furniture keeps this far [m] (in plan, from its box) from the robot's start and the dog's centre."""
 KINDS = ("wall", "gaps", "open_end", "two_lines")
 
 
@@ -145,9 +147,9 @@ def _place(rng: np.random.Generator, objs: list[SceneObject], label: str, size, 
         x, y = float(rng.uniform(*xr)), float(rng.uniform(*yr))
         if not clear_of(objs, (x, y), max(size[0], size[2]) / 2 + 0.2):
             continue
-        if any(math.dist((x, y), p) < 1.0 for p in keep_from):
-            continue
         o = obj(oid, label, x, y, size, float(rng.uniform(-math.pi, math.pi)) if yaw is None else yaw)
+        if not all(clear_of([o], p, KEEP_CLEAR) for p in keep_from):  # the start and the dog stay clear
+            continue
         objs.append(o)
         return o
     return None

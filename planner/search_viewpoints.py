@@ -35,6 +35,7 @@ from scipy.sparse import csr_matrix
 from scipy.sparse.csgraph import dijkstra
 
 from planner.grid import Closed, PlanningGrid
+from planner.search_rays import per_azimuth
 
 UNKNOWN, FREE, OCCUPIED = 0, 1, 2
 
@@ -156,31 +157,27 @@ def view_gain(state: np.ndarray, blocking: np.ndarray, grid: PlanningGrid, eyes:
     zc = ws.min[2] + (np.arange(nz) + 0.5) * res
     zweight = np.where(zc <= target_top + res, 1.0, HIGH_WEIGHT)
     A, E = dirs.shape[:2]
-    gains = np.zeros(len(eyes))
-    yaws = np.zeros(len(eyes))
-    # the rays' samples relative to the eye, shared by every candidate: [A, E, R, 3]
-    rel = dirs[:, :, None, :] * r[None, None, :, None]
-    vol = (r ** 2 * step)[None, None, :] * d_omega[None, :, None]  # [1, E, R]
+    eyes = np.ascontiguousarray(np.asarray(eyes, dtype=np.float64).reshape(-1, 3))
+    vol = (r ** 2 * step)[None, :] * d_omega[:, None]  # [E, R]: the volume each sample stands for [m³]
+    per_az = per_azimuth(eyes, np.ascontiguousarray(dirs), r, np.ascontiguousarray(vol), unknown, blocked,
+                         np.ascontiguousarray(zweight, dtype=np.float64), lo, float(res), nx, ny, nz)  # [N, A]
     half_w = int(round(math.degrees(HFOV / 2) / AZ_STEP_DEG))
-    for n, e in enumerate(np.asarray(eyes, dtype=np.float64)):
-        # also the near part (eye .. MIN_RANGE) may be blocked: test it with the first samples
-        pts = e + rel
+    window = sum(np.roll(per_az, s_, axis=1) for s_ in range(-half_w, half_w + 1))  # the camera's 62 deg
+    if yaw is None:
+        best = np.argmax(window, axis=1) if len(eyes) else np.zeros(0, dtype=np.int64)
+    else:
+        best = np.full(len(eyes), int(round(math.degrees(yaw) / AZ_STEP_DEG)) % A)
+    gains = window[np.arange(len(eyes)), best] if len(eyes) else np.zeros(0)
+    yaws = (az[best] + math.pi) % (2 * math.pi) - math.pi
+    if len(eyes):  # the last eye's unknown cells in view (the same samples, in numpy: one eye)
+        sector = (np.arange(best[-1] - half_w, best[-1] + half_w + 1)) % A
+        pts = eyes[-1] + dirs[sector][:, :, None, :] * r[None, None, :, None]
         cell = np.floor((pts - lo) / res).astype(np.int64)
         i, j, k = cell[..., 0], cell[..., 1], cell[..., 2]
         inside = (i >= 0) & (j >= 0) & (k >= 0) & (i < nx) & (j < ny) & (k < nz)
         flat = np.where(inside, (i * ny + j) * nz + k, 0)
-        stop = blocked[flat] | ~inside
-        alive = np.cumsum(stop, axis=2) == 0  # before the first occupied cell or the workspace's edge
-        val = np.where(alive & unknown[flat], zweight[np.clip(k, 0, nz - 1)], 0.0) * vol
-        per_az = val.sum(axis=(1, 2))  # [A]
-        window = sum(np.roll(per_az, s) for s in range(-half_w, half_w + 1))
-        best = int(np.argmax(window)) if yaw is None else int(round(math.degrees(yaw) / AZ_STEP_DEG)) % A
-        gains[n] = float(window[best])
-        yaws[n] = float((az[best] + math.pi) % (2 * math.pi) - math.pi)
-        if n == len(eyes) - 1:
-            sector = (np.arange(best - half_w, best + half_w + 1)) % A
-            hit = (alive & unknown[flat])[sector]
-            in_view[flat[sector][hit]] = True
+        alive = np.cumsum(blocked[flat] | ~inside, axis=-1) == 0  # before the first occupied cell or the edge
+        in_view[flat[alive & unknown[flat]]] = True
     return gains, yaws, in_view.reshape(nx, ny, nz)
 
 
