@@ -130,7 +130,8 @@ class Mapper:
             pose_given: The mount's pitch, roll and height are known for this photo (checked against the
                 photo's floor, :mod:`pipeline.ranging.photo_floor`). ``False``: only its yaw and position
                 are; the camera's gravity and height come from the photo (the mount's height, when above
-                5 cm, is the prior) and the scene's world frame follows them.
+                5 cm, is the prior) and the scene's world frame follows them. A mount marked
+                :attr:`~pipeline.camera.geometry.CameraMount.assumed` counts as ``False``.
 
         Raises:
             MapperError: Bad image, intrinsics that do not match it, empty prompts, or prompts the
@@ -148,6 +149,7 @@ class Mapper:
         except CameraError as exc:
             raise MapperError(str(exc)) from None
         mount = mount or CameraMount()
+        pose_given = pose_given and not mount.assumed  # a stand-in mount: the photo's floor decides
         robot_pose = robot_pose or Pose()
         pairs = self._prompts(prompts)
         detector = self.models.detector

@@ -283,7 +283,9 @@ class CameraSource:
             raise CameraSourceError(f"{self.spec.label}: {exc}") from None
         with self._cond:
             n = self._seq
-        return FolderPhoto(f"{self.spec.label}#{n}", frame, self.camera.intrinsics, None, self.camera.mount, None)
+        # no [mount] in the camera file: no pose for the photo (the mapper fits it from the floor)
+        mount = self.camera.mount if self.camera.mount_given else None
+        return FolderPhoto(f"{self.spec.label}#{n}", frame, self.camera.intrinsics, None, mount, None)
 
     def __call__(self) -> tuple[np.ndarray, Any]:
         """``(RGB frame, Intrinsics)``: the camera callable a MAVLink link takes (``camera=``)."""

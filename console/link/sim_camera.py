@@ -10,6 +10,7 @@ Frames: the camera pose is ``world <- camera`` (OpenCV optical frame), the robot
 
 from __future__ import annotations
 
+import dataclasses
 import time
 
 import numpy as np
@@ -46,8 +47,10 @@ def render_capture(r: RenderResult, world: Scene, intrinsics: Intrinsics, camera
 
 
 def folder_capture(photo: FolderPhoto, robot: Pose, mount: CameraMount) -> CaptureResult:
-    """A photo from a folder (or a live source) taken at ``robot``; the photo's own mount wins."""
-    mount = mount if photo.mount is None else photo.mount
+    """A photo from a folder (or a live source) taken at ``robot``; the photo's own mount wins. Without
+    one, the robot's mount is only a stand-in (:attr:`CameraMount.assumed`): the mapper fits the camera's
+    pitch, roll and height from the photo, the robot's mount height its prior."""
+    mount = dataclasses.replace(mount, assumed=True) if photo.mount is None else photo.mount
     camera = camera_pose_in_world(robot, mount)
     return CaptureResult(photo.image, photo.intrinsics, camera, robot, mount, time.time(),
                          "captures-folder", photo.name, photo.ground_truth)

@@ -177,12 +177,16 @@ class CameraMount:
         pitch: Downward tilt of the optical axis [rad] (positive looks down).
         yaw: Pan of the optical axis to the left [rad].
         roll: Roll about the optical axis [rad].
+        assumed: The pitch, roll and height are a stand-in, not known for this photo (a captures
+            folder's photo without ``gravity_cam`` / ``camera_height``, a live camera whose file has no
+            ``[mount]``): the mapper then fits them from the photo's floor, the mount's height its prior.
     """
 
     position: tuple[float, float, float] = (0.15, 0.0, 0.35)
     pitch: float = 0.0
     yaw: float = 0.0
     roll: float = 0.0
+    assumed: bool = False
 
     @property
     def pose(self) -> Pose:
