@@ -6,7 +6,7 @@ written in the session file's own format (scene, route, mission, last capture's 
 space; world frame [m]) and read back through the same checks
 (:func:`console.session.session_parse.parse_saved`), so a state that would not restore as a session
 is not put back either. Known spaces shared by several states are written once (``known_spaces``,
-referred to by index). The grid is not stored (it is rebuilt when a state is put back) and the
+referred to by key). The grid is not stored (it is rebuilt when a state is put back) and the
 capture's photo stays in ``captures/`` (its metadata names it).
 
 Bounded: at most :data:`~console.session.history.HISTORY_DEPTH` states a stack, and the oldest undo
@@ -37,7 +37,7 @@ MAX_HISTORY_BYTES = 40 * 1024 * 1024
 10 000 objects is about 10 MB a state; the paper's room with its known space about 0.1 MB)."""
 
 
-def _state_dict(state: SceneState, workspace: Workspace, margin: float, known_ref: int | None) -> dict[str, Any]:
+def _state_dict(state: SceneState, workspace: Workspace, margin: float, known_ref: str | None) -> dict[str, Any]:
     return {
         "label": state.label,
         "key": state.key,
@@ -56,48 +56,65 @@ def _state_dict(state: SceneState, workspace: Workspace, margin: float, known_re
     }
 
 
-def history_to_dict(undo: Sequence[SceneState], redo: Sequence[SceneState], workspace: Workspace, margin: float,
-                    max_bytes: int = MAX_HISTORY_BYTES, cache: dict[int, tuple[Any, dict[str, Any]]] | None = None,
-                    ) -> dict[str, Any]:
-    """Both stacks (oldest first) as the ``history.json`` dict, within ``max_bytes`` (oldest undo
-    states dropped first). ``cache`` (id of a known space -> (it, its dict)) saves compressing the same
-    known space again on every write; it is trimmed to the states given."""
-    cache = {} if cache is None else cache
-    spaces: list[dict[str, Any]] = []
-    index: dict[int, int] = {}
-    seen: set[int] = set()
+class HistoryWriter:
+    """Writes ``history.json``; keeps each state's and each known space's JSON text between writes
+    (states are immutable), so a write after one edit serialises only the new state."""
 
-    def ref(known: Any) -> int | None:
-        if known is None:
-            return None
-        k = id(known)
-        seen.add(k)
-        if k not in index:
-            if k not in cache or cache[k][0] is not known:
-                cache[k] = (known, known.to_dict())
-            index[k] = len(spaces)
-            spaces.append(cache[k][1])
-        return index[k]
+    def __init__(self) -> None:
+        self._entries: dict[int, tuple[SceneState, str, str | None]] = {}  # id -> (state, JSON text, known key)
+        self._known: dict[int, tuple[Any, str, str]] = {}  # id -> (known space, key, its JSON text)
+        self._serial = 0
 
-    # newest first, so the size bound drops the oldest
-    redo_out = [_state_dict(s, workspace, margin, ref(s.known)) for s in reversed(redo)]
-    undo_out: list[dict[str, Any]] = []
-    size = sum(len(json.dumps(e)) for e in redo_out)
-    for s in reversed(undo):
-        entry = _state_dict(s, workspace, margin, ref(s.known))
-        size += len(json.dumps(entry)) + (len(json.dumps(spaces[-1])) if entry["known_ref"] == len(spaces) - 1 else 0)
-        if size > max_bytes and undo_out:
-            break
-        undo_out.append(entry)
-    for k in [k for k in cache if k not in seen]:
-        del cache[k]
-    return {"kind": HISTORY_KIND, "version": HISTORY_VERSION, "known_spaces": spaces,
-            "undo": undo_out[::-1], "redo": redo_out[::-1]}
+    def text(self, undo: Sequence[SceneState], redo: Sequence[SceneState], workspace: Workspace, margin: float,
+             max_bytes: int = MAX_HISTORY_BYTES) -> str:
+        """Both stacks (oldest first) as ``history.json`` text within ``max_bytes`` (oldest undo states
+        left out first; the newest undo state and the redo stack always kept)."""
+        entries: dict[int, tuple[SceneState, str, str | None]] = {}
+        used: set[str] = set()
+        known: dict[int, tuple[Any, str, str]] = {}
 
+        def entry(state: SceneState) -> tuple[str, str | None]:
+            ref = None
+            if state.known is not None:
+                k = id(state.known)
+                got = self._known.get(k)
+                if got is None or got[0] is not state.known:
+                    self._serial += 1
+                    got = (state.known, f"k{self._serial}", json.dumps(state.known.to_dict(), separators=(",", ":")))
+                    self._known[k] = got
+                known[k] = got
+                ref = got[1]
+            cached = self._entries.get(id(state))
+            if cached is None or cached[0] is not state:
+                cached = (state, json.dumps(_state_dict(state, workspace, margin, ref), allow_nan=False,
+                                            separators=(",", ":")), ref)
+            entries[id(state)] = cached
+            return cached[1], cached[2]
 
-def write_history_file(path: Path, data: dict[str, Any]) -> None:
-    """Write a history dict atomically; raises ``OSError``, ``TypeError`` or ``ValueError``."""
-    write_text_atomic(path, json.dumps(data, allow_nan=False, separators=(",", ":")) + "\n")
+        redo_out: list[str] = []
+        for s in redo:
+            text, ref = entry(s)
+            redo_out.append(text)
+            used.add(ref or "")
+        size = sum(len(t) for t in redo_out)
+        undo_out: list[str] = []
+        for s in reversed(undo):  # newest first: the size bound leaves out the oldest
+            text, ref = entry(s)
+            size += len(text)
+            if size > max_bytes and undo_out:
+                break
+            undo_out.append(text)
+            used.add(ref or "")
+        undo_out.reverse()
+        self._entries, self._known = entries, known
+        spaces = ",".join(f"{json.dumps(key)}:{text}" for _, key, text in known.values() if key in used)
+        return ('{"kind":%s,"version":%d,"known_spaces":{%s},"undo":[%s],"redo":[%s]}\n'
+                % (json.dumps(HISTORY_KIND), HISTORY_VERSION, spaces, ",".join(undo_out), ",".join(redo_out)))
+
+    def write(self, path: Path, undo: Sequence[SceneState], redo: Sequence[SceneState], workspace: Workspace,
+              margin: float) -> None:
+        """Write the history atomically; raises ``OSError``, ``TypeError`` or ``ValueError``."""
+        write_text_atomic(path, self.text(undo, redo, workspace, margin))
 
 
 def read_history_file(path: Path, workspace: Workspace) -> tuple[list[SceneState], list[SceneState], list[str]]:
@@ -121,9 +138,9 @@ def read_history_file(path: Path, workspace: Workspace) -> tuple[list[SceneState
         return [], [], [f"{path.name} is not a MorphoNavi undo history (version {HISTORY_VERSION}): "
                         "the undo history starts empty"]
     spaces = data.get("known_spaces")
-    spaces = spaces if isinstance(spaces, list) else []
+    spaces = spaces if isinstance(spaces, dict) else {}
     problems: list[str] = []
-    known_cache: dict[int, Any] = {}
+    known_cache: dict[str, Any] = {}
 
     def states(name: str) -> list[SceneState]:
         raw = data.get(name)
@@ -145,7 +162,7 @@ def read_history_file(path: Path, workspace: Workspace) -> tuple[list[SceneState
     return states("undo"), states("redo"), problems
 
 
-def _state_from(entry: Any, spaces: list[Any], workspace: Workspace, known_cache: dict[int, Any],
+def _state_from(entry: Any, spaces: dict[str, Any], workspace: Workspace, known_cache: dict[str, Any],
                 where: str) -> SceneState:
     if not isinstance(entry, dict):
         raise SessionError(f"{where}: must be an object")
@@ -157,8 +174,8 @@ def _state_from(entry: Any, spaces: list[Any], workspace: Workspace, known_cache
         raise SessionError(f"{where}.state: must be an object")
     ref = entry.get("known_ref")
     if ref is not None:
-        if not isinstance(ref, int) or isinstance(ref, bool) or not 0 <= ref < len(spaces):
-            raise SessionError(f"{where}.known_ref: must be an index into known_spaces (0..{len(spaces) - 1}), got {ref!r}")
+        if not isinstance(ref, str) or ref not in spaces:
+            raise SessionError(f"{where}.known_ref: must name one of known_spaces, got {ref!r}")
         state = dict(state, known_space=spaces[ref])
     saved = parse_saved(state, where, workspace)
     if saved.problems or saved.notes:

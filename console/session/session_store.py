@@ -34,7 +34,7 @@ from planner.route import Route
 from console.session.capture_files import (
     highest_capture_number, numbered_capture_id, read_capture_files, write_capture_files,
 )
-from console.session.history_file import HISTORY_FILE, history_to_dict, read_history_file, write_history_file
+from console.session.history_file import HISTORY_FILE, HistoryWriter, read_history_file
 from console.session.session_core import SessionCore
 from console.session.session_parse import SESSION_VERSION, SavedSession, parse_saved
 from console.session.session_types import CaptureRecord, Notice, SessionError, Settings
@@ -310,18 +310,17 @@ class Persistence(SessionCore):
         self._save_history_locked()
 
     _history_written = -1  # the history's version last written to history.json
-    _history_cache: dict[int, Any] | None = None
+    _history_writer: HistoryWriter | None = None
 
     def _save_history_locked(self) -> None:
         """Write the undo / redo history (``history.json``) when it changed since it was last written."""
         if self._history.version == self._history_written:
             return
-        if self._history_cache is None:
-            self._history_cache = {}
+        if self._history_writer is None:
+            self._history_writer = HistoryWriter()
         undo, redo = self._history.states()
         try:
-            write_history_file(self.folder / HISTORY_FILE, history_to_dict(
-                undo, redo, self._workspace, self._margin, cache=self._history_cache))
+            self._history_writer.write(self.folder / HISTORY_FILE, undo, redo, self._workspace, self._margin)
         except (OSError, TypeError, ValueError) as exc:  # the map is saved; only the history is not
             log.error("cannot write the undo history %s: %s", HISTORY_FILE, exc)
             return

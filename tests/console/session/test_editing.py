@@ -142,7 +142,7 @@ def test_the_saved_history_is_bounded_and_a_bad_file_starts_it_empty_with_the_re
         s.move_object("a", (1.0 + 0.05 * (i % 7), 2.0, 0.3))
     saved = json.loads((s.folder / HISTORY_FILE).read_text())
     assert len(saved["undo"]) == HISTORY_DEPTH and saved["redo"] == []
-    assert len(saved["known_spaces"]) == 0  # no capture: no known space in any state
+    assert saved["known_spaces"] == {}  # no capture: no known space in any state
     (s.folder / HISTORY_FILE).write_text('{"kind": "morphonavi-history", "version": 1, "undo": [{"label": "x"}]}')
     again = Session(tmp_path / "s", start=START)
     again.restore_last()
@@ -187,6 +187,12 @@ def test_a_mapped_capture_after_a_restart_gets_a_new_id(tmp_path: Path) -> None:
             robot.close()
         ids.append(s.capture.id)  # type: ignore[union-attr]
     assert ids == ["cap-0001", "cap-0002"]
+    saved = json.loads((tmp_path / "s" / HISTORY_FILE).read_text())
+    assert len(saved["known_spaces"]) == 1  # the state before the second capture: the first one's known space
+    assert s.known_space is not None and s.undo_edit() == "undone: capture cap-0002"
+    assert s.capture.id == "cap-0001" and s.known_space is not None  # type: ignore[union-attr]  # from the file
+    assert s.undo_edit() == "undone: capture cap-0001" and s.known_space is None and s.scene.objects == ()
+    assert s.redo_edit() == "redone: capture cap-0001" and s.known_space is not None
 
 
 # --- the route start follows the robot during every run ---------------------------------------------------
