@@ -139,8 +139,12 @@ def typed_goal(values: Sequence[Any], workspace: Workspace) -> Vec3:
 def top_view(workspace: Workspace, vfov: float, aspect: float, margin: float = 1.1) -> tuple[Vec3, Vec3, Vec3]:
     """A camera looking straight down at the whole workspace: ``(position, look_at, up)`` (world [m]).
 
+    The whole flight volume is in the picture, not only the floor: its top rectangle, nearer the
+    camera, looks bigger than the floor, so the camera is put far enough above the *top* (a robot
+    hovering at 2.1 m by a wall stays in the picture).
+
     Args:
-        workspace: The workspace to frame (its floor rectangle, and its top stays below the camera).
+        workspace: The workspace to frame (its whole box).
         vfov: The camera's vertical field of view [rad], in (0, pi).
         aspect: Its width / height, > 0.
         margin: How much room to leave around the workspace (1.1 = 10 %).
@@ -157,8 +161,7 @@ def top_view(workspace: Workspace, vfov: float, aspect: float, margin: float = 1
     half_w, half_h = (ws.max[0] - ws.min[0]) / 2 * margin, (ws.max[1] - ws.min[1]) / 2 * margin
     tan_v = math.tan(vfov / 2)
     dist = max(half_h / tan_v, half_w / (tan_v * aspect))
-    height = float(ws.floor) + dist
-    height = max(height, float(ws.max[2]) + 0.5)
+    height = float(ws.max[2]) + max(dist, 0.5)  # the top rectangle fits; so does the floor, farther away
     return ((cx, cy - 1e-3 * height, height), (cx, cy, float(ws.floor)), (0.0, 0.0, 1.0))
 
 

@@ -187,7 +187,7 @@ def test_typed_goals_are_checked_field_by_field() -> None:
             typed_goal(values, ws)
 
 
-def test_the_top_view_looks_straight_down_on_the_whole_workspace() -> None:
+def test_the_top_view_looks_straight_down_on_the_whole_flight_volume() -> None:
     ws = Workspace()
     vfov, aspect = math.radians(50.0), 740 / 900
     position, look_at, up = top_view(ws, vfov, aspect)
@@ -196,9 +196,10 @@ def test_the_top_view_looks_straight_down_on_the_whole_workspace() -> None:
     assert forward[2] < -0.9999 and up == (0.0, 0.0, 1.0)  # straight down
     assert position[2] > ws.max[2]
     for corner in [(ws.min[0], ws.min[1]), (ws.max[0], ws.min[1]), (ws.min[0], ws.max[1]), (ws.max[0], ws.max[1])]:
-        dz = position[2] - ws.floor
-        assert abs(corner[1] - look_at[1]) / dz <= math.tan(vfov / 2) + 1e-6  # within the vertical fov
-        assert abs(corner[0] - look_at[0]) / dz <= math.tan(vfov / 2) * aspect + 1e-6  # and the horizontal
+        for z in (ws.floor, ws.max[2]):  # the whole flight volume: its top corners are the nearest to the camera
+            dz = position[2] - z
+            assert abs(corner[1] - look_at[1]) / dz <= math.tan(vfov / 2) + 1e-6  # within the vertical fov
+            assert abs(corner[0] - look_at[0]) / dz <= math.tan(vfov / 2) * aspect + 1e-6  # and the horizontal
     with pytest.raises(SessionError, match="fov"):
         top_view(ws, 0.0, 1.0)
 
