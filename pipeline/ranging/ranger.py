@@ -104,6 +104,10 @@ class MappedObject:
         return float(self.sigma_z * np.linalg.norm(self.center_cam) / float(self.center_cam[2]))
 
 
+MIN_SPREAD_REFS = 2
+"""References needed to measure the depth map's spread against the other cues (one degree of freedom
+beyond its fitted scale; pooled with the prior ``MapperConfig.depth_sigma``, :func:`pooled_sigma`)."""
+
 SAME_GROUND = object()
 """``Ranger.measure``'s default ``ground``: the ranger's own floor."""
 
@@ -283,19 +287,21 @@ class Ranger:
         if self.exact_depth:
             return EXACT_DEPTH_SIGMA, f"sigma: exact depth ({EXACT_DEPTH_SIGMA:.1%}: the placement from it)", True
         values, surfaces = self._references(objects)
-        spread = depth_fit_spread(values, surfaces, scale)
+        # two references already show how far the map disagrees with them (one degree of freedom, pooled
+        # with the prior below); with one, the scale fitted to it says nothing about the map's error
+        spread = depth_fit_spread(values, surfaces, scale, min_refs=MIN_SPREAD_REFS)
         if spread is not None:  # the robust spread hides a tail (an indoor model saturating outdoors): RMS too
             z = np.asarray(scale.to_metric(np.asarray(values)), dtype=np.float64)
             ok = np.isfinite(z) & (z > 0)
             res = np.log(np.asarray(surfaces)[ok] / z[ok])
             spread = max(spread, float(np.sqrt(np.mean((res - np.median(res)) ** 2))))
         if spread is None:
-            return cfg.depth_sigma, (f"sigma: depth map unverified ({len(values)} reference objects, 3 needed): "
-                                     f"{cfg.depth_sigma:.0%}"), False
+            return cfg.depth_sigma, (f"sigma: depth map unverified ({len(values)} reference objects, "
+                                     f"{MIN_SPREAD_REFS} needed): {cfg.depth_sigma:.0%}"), False
         refs = [o for o in objects if o.geometric is not None and o.depth_value is not None and o.cues]
         ref_rel = float(np.median([min(c.rel_sigma for c in o.cues) for o in refs])) if refs else cfg.geometric_sigma
         rel = pooled_sigma(math.sqrt(max(spread**2 - ref_rel**2, MIN_DEPTH_SIGMA**2)), len(values) - 1, cfg.depth_sigma)
-        trusted = scale.kind == "metric" and spread <= cfg.trust_depth_spread
+        trusted = scale.kind == "metric" and spread <= cfg.trust_depth_spread and len(values) >= 3
         return rel, (f"sigma: depth map {rel:.0%} (spread {spread:.0%} against the other cues over "
                      f"{len(values)} reference objects)"), trusted
 
