@@ -292,6 +292,10 @@ def depth_fit_spread(values: Sequence[float], reference_m: Sequence[float], scal
     return float(1.4826 * np.median(np.abs(res - np.median(res))))
 
 
+MIN_SPREAD_REFS = 2
+"""References needed to measure the depth map's spread against the other cues (one degree of freedom
+beyond its fitted scale; pooled with the prior ``MapperConfig.depth_sigma`` by :func:`pooled_sigma`)."""
+
 DEPTH_PRIOR_DOF = 3.0
 """How many reference objects the prior depth-map sigma (``MapperConfig.depth_sigma``, 30 %) is worth when
 pooled with the spread measured on a photo (:func:`pooled_sigma`): 4 references that happen to agree

@@ -22,8 +22,8 @@ import numpy as np
 
 from pipeline.catalog import Catalog, CatalogEntry
 from pipeline.ranging.distance import (
-    IDENTITY_SCALE, DepthScale, FusedDistance, Truncation, depth_fit_spread, fit_depth_scale, fuse_distances,
-    inverse_variance_weights, mask_median_depth, pooled_sigma, truncation,
+    IDENTITY_SCALE, MIN_SPREAD_REFS, DepthScale, FusedDistance, Truncation, depth_fit_spread, fit_depth_scale,
+    fuse_distances, inverse_variance_weights, mask_median_depth, pooled_sigma, truncation,
 )
 from pipeline.ranging.fusion import Cue, Fused, fuse_cues
 from pipeline.camera.geometry import Intrinsics
@@ -103,10 +103,6 @@ class MappedObject:
             return None
         return float(self.sigma_z * np.linalg.norm(self.center_cam) / float(self.center_cam[2]))
 
-
-MIN_SPREAD_REFS = 2
-"""References needed to measure the depth map's spread against the other cues (one degree of freedom
-beyond its fitted scale; pooled with the prior ``MapperConfig.depth_sigma``, :func:`pooled_sigma`)."""
 
 SAME_GROUND = object()
 """``Ranger.measure``'s default ``ground``: the ranger's own floor."""
