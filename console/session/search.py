@@ -52,7 +52,7 @@ from console.session.search_types import (
     CONFIRM_CAPTURES, GAIN_MIN, MISSION_TIMEOUT, MODES, SURE_SCORE, SURE_SIGMA, SearchConfig, SearchResult,
     target_height, target_matches,
 )
-from console.session.session import JobStatus, Session, SessionError
+from console.session.session import RUN, JobStatus, Session, SessionError
 
 log = logging.getLogger(__name__)
 
@@ -86,6 +86,12 @@ class SearchJob(SearchMoves):
         self._t0 = 0.0
         self._looked: np.ndarray | None = None  # cells in view of a capture that stayed unknown
         self._grids = GridCache()
+        session.subscribe(self._on_event)
+
+    def _on_event(self, topic: str, payload: Any) -> None:
+        """A Land here or Return the operator starts while the search runs pauses it (even mid-capture)."""
+        if topic == RUN and getattr(payload, "state", "") == "running" and self.running and not self._pause.is_set():
+            self._check_commands()
 
     # --- state / control ------------------------------------------------------------------------------
     @property

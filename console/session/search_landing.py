@@ -15,18 +15,20 @@ metres.
 from __future__ import annotations
 
 import math
-from typing import Sequence
+from typing import Any, Mapping, Sequence
 
 import numpy as np
 from scipy import ndimage
 
 from planner.grid import CellState, Closed, PlanningGrid
+from planner.mission import Mission, MissionError
+
+from console.session import operator_state as rules
+from console.session.operator_state import CommandState
+from console.session.session_types import SessionError, fmt_point
 
 SPOTS_TRIED = 8
 """Nearest landing spots planned to, in order, before Land here is refused."""
-
-UNSEEN_PREFIX = "Land here is off: the floor below"
-"""How :func:`console.session.operator_state.unseen_floor_blocker`'s reason starts."""
 
 
 def seen_free_floor(grid: PlanningGrid) -> np.ndarray | None:
@@ -61,9 +63,58 @@ def nearest_landing_spots(grid: PlanningGrid, point: Sequence[float], limit: int
     return [(float(centres[n, 0]), float(centres[n, 1]), float(ws.floor)) for n in order]
 
 
-def unseen_below(reason: str) -> bool:
-    """Whether a Land here reason is "the floor below has not been seen" (the one a search lands around)."""
-    return reason.startswith(UNSEEN_PREFIX)
+def straight_down_blocker(robot: Any, grid: PlanningGrid) -> str | None:
+    """Why the robot cannot land straight down where it hovers (floor below not seen free, or a mapped
+    obstacle below), or ``None``."""
+    return rules.unseen_floor_blocker(robot.pose.translation, grid) or rules.landing_blocker(robot, grid)
 
 
-__all__ = ["SPOTS_TRIED", "UNSEEN_PREFIX", "nearest_landing_spots", "seen_free_floor", "unseen_below"]
+def land_elsewhere_state(commands: Mapping[str, CommandState], robot: Any, run: Any, ws: Any, launch: Any,
+                         grid: PlanningGrid) -> dict[str, CommandState]:
+    """The vehicle commands with Land here on when only the floor below stops it and a seen-free spot
+    exists (it will land there); off with both reasons when there is none."""
+    out = dict(commands)
+    land = out.get("land")
+    if robot is None or land is None or land.enabled or not land.shown:
+        return out
+    if not rules.vehicle_commands(robot, run, ws, launch, None)["land"].enabled:  # link, position, a mission ...
+        return out
+    if straight_down_blocker(robot, grid) is None:
+        return out
+    if nearest_landing_spots(grid, robot.pose.translation, 1):
+        out["land"] = CommandState(True, True, "")
+    else:
+        out["land"] = CommandState(True, False, f"{land.reason}; and no floor was seen free to land on instead")
+    return out
+
+
+def land_elsewhere_mission(robot: Any, grid: PlanningGrid, route: Any, ws: Any, mission_id: str) -> Mission | None:
+    """Land here during a search: ``None`` when the robot can land straight down (the usual Land here);
+    else a mission to the nearest seen-free floor spot the planner reaches, landing there (world [m]).
+
+    Raises :class:`SessionError` with the reasons when no spot can be reached."""
+    why = straight_down_blocker(robot, grid)
+    if why is None:
+        return None
+    origin = rules.robot_origin(robot, ws)
+    if origin is None:
+        raise SessionError(rules.position_blocker(robot) or "the robot is outside the workspace")
+    spots = nearest_landing_spots(grid, origin)
+    if not spots:
+        raise SessionError(f"{why}; and no floor was seen free to land on instead")
+    last = ""
+    for spot in spots:
+        res = route.plan(origin, spot)
+        if not res.ok:
+            last = res.message
+            continue
+        try:
+            return rules.mission_from_path(res.cells, grid, mission_id)
+        except MissionError as exc:
+            last = str(exc)
+    raise SessionError(f"{why}; and none of the {len(spots)} nearest seen-free spots (the nearest "
+                       f"{fmt_point(spots[0][:2])}) can be reached: {last}")
+
+
+__all__ = ["SPOTS_TRIED", "land_elsewhere_mission", "land_elsewhere_state", "nearest_landing_spots", "seen_free_floor",
+           "straight_down_blocker"]

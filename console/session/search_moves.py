@@ -69,21 +69,34 @@ class SearchMoves:
         """Plan from the robot to ``goal`` and run it; ``None`` when there, :data:`PAUSED`,
         :data:`STOPPED`, :data:`BATTERY`, or why the move did not get there."""
         s = self._session  # type: ignore[attr-defined]
+        self._check_commands()
+        if self._pause.is_set():  # type: ignore[attr-defined]
+            return PAUSED
         self._set_unknown(unknown)
         try:
+            if s.run.active:  # a Land here or Return the operator just started: never edit the route under it
+                self._check_commands()
+                return PAUSED if self._pause.is_set() else "a mission is under way"  # type: ignore[attr-defined]
             if s.route_snapshot().registered or s.route_snapshot().candidate is not None:
                 s.clear_route()
+            res = s.add_goal(goal)
+            if res.ok:
+                s.register()
+                mission = s.build_mission()
         except SessionError as exc:
-            return str(exc)
-        res = s.add_goal(goal)
+            self._check_commands()  # a Land here or Return started meanwhile
+            return PAUSED if self._pause.is_set() else str(exc)  # type: ignore[attr-defined]
         if not res.ok:
-            return f"no route to {what}: {res.message}"
-        s.register()
-        mission = s.build_mission()
+            self._check_commands()
+            return PAUSED if self._pause.is_set() else f"no route to {what}: {res.message}"  # type: ignore[attr-defined]
         kinds = "-".join(dict.fromkeys(mission.kinds()))
         self._step("move", f"going to {what}: {kinds} ({res.message})", mission=mission_json(mission))  # type: ignore[attr-defined]
         self._self_abort = False
-        self._runner.execute(mission)  # type: ignore[attr-defined]
+        try:
+            self._runner.execute(mission)  # type: ignore[attr-defined]
+        except Exception as exc:  # the manager refused: a Land here or Return started meanwhile, or the link
+            self._check_commands()
+            return PAUSED if self._pause.is_set() else f"the move could not start: {exc}"  # type: ignore[attr-defined]
         return self._follow()
 
     def _follow(self) -> str | None:
