@@ -336,8 +336,14 @@ class ConsoleApp:
 
             self.look = LookJob(session, self.link, self.mapping)
             self._closers.append(self.look.stop)
+            from console.session.go_look import GoLookJob  # the suggested look towards a goal not seen yet
+
+            self.go_look = GoLookJob(session, self.link, self.mapping, self.runner) if self.runner is not None else None
+            if self.go_look is not None:
+                self._closers.append(self.go_look.stop)
             self.views["look"] = LookView(server, session, self.look,
-                                          lambda: tuple(paths_holder["p"].typed_values()[:2]))  # type: ignore[arg-type]
+                                          lambda: tuple(paths_holder["p"].typed_values()[:2]),  # type: ignore[arg-type]
+                                          go_look=self.go_look)
             from console.views.held_capture import HeldCaptureControls  # Merge / Replace / Discard a held-back capture
 
             self.views["held_capture"] = HeldCaptureControls(server, session, self.mapping)

@@ -37,6 +37,7 @@ from typing import Iterable, Sequence
 
 import numpy as np
 
+from numba import njit
 from scipy import ndimage
 
 from planner.astar import AStarSearcher
@@ -208,7 +209,7 @@ def spots_to_open(grid: PlanningGrid, state: np.ndarray, target: Sequence[float]
     if len(cand) == 0:
         return np.zeros((0, 3), dtype=np.int64), 0.0
     low = np.where(nd[:, 2] < grid.walk_layers(), FLOOR_WEIGHT, 1.0)  # the floor is the hard part
-    seen = (line_of_sight(grid, blocking, eyes[cand], nd) & fov[cand]) @ low
+    seen = line_of_sight(grid, blocking, eyes[cand], nd, fov[cand]) @ low
     best = seen.max()
     if best <= 0:
         return np.zeros((0, 3), dtype=np.int64), 0.0
@@ -286,34 +287,54 @@ def in_view(eyes: np.ndarray, yaws: np.ndarray, pts: np.ndarray, half_vfov: floa
             & (elev <= FOV_MARGIN * half_vfov))
 
 
+@njit(cache=True)
+def _los_kernel(eyes: np.ndarray, pts: np.ndarray, pe: np.ndarray, pp: np.ndarray, own: np.ndarray,
+                block: np.ndarray, lo: np.ndarray, res: float, nx: int, ny: int, nz: int) -> np.ndarray:
+    """For each pair ``(pe[q], pp[q])``: no ``block`` cell (flat, C order) on the segment from the eye to
+    the point, sampled every half cell, the point's own cell ``own[pp[q]]`` excepted."""
+    out = np.ones(len(pe), dtype=np.bool_)
+    step = res / 2.0
+    for q in range(len(pe)):
+        e = eyes[pe[q]]
+        p = pts[pp[q]]
+        dx, dy, dz = p[0] - e[0], p[1] - e[1], p[2] - e[2]
+        n = int(math.ceil(math.sqrt(dx * dx + dy * dy + dz * dz) / step))
+        target = own[pp[q]]
+        for m in range(n):  # the target's own sample (m = n) left out
+            f = m / n
+            i = int(math.floor((e[0] + f * dx - lo[0]) / res))
+            j = int(math.floor((e[1] + f * dy - lo[1]) / res))
+            k = int(math.floor((e[2] + f * dz - lo[2]) / res))
+            if i < 0 or j < 0 or k < 0 or i >= nx or j >= ny or k >= nz:
+                continue
+            c = (i * ny + j) * nz + k
+            if c != target and block[c]:
+                out[q] = False
+                break
+    return out
+
+
 def line_of_sight(grid: PlanningGrid, blocking: np.ndarray, eyes: np.ndarray, cells: np.ndarray,
-                  chunk: int = 20000) -> np.ndarray:
+                  pairs: np.ndarray | None = None) -> np.ndarray:
     """``bool [N, M]``: whether the straight line from each eye ``[N, 3]`` (world [m]) to the centre
     of each cell ``[M, 3]`` crosses no ``blocking`` cell (the target's own cell excepted; sampled every
-    half cell)."""
+    half cell). Only the ``pairs`` (``bool [N, M]``) are cast (default all); the others are ``False``."""
     ws = grid.workspace
     n, m = len(eyes), len(cells)
     out = np.zeros((n, m), dtype=bool)
     if n == 0 or m == 0:
         return out
-    pts = ws.centers(cells)
-    lo = np.asarray(ws.min, dtype=np.float64)
     nx, ny, nz = ws.shape
-    steps = int(math.ceil(VIEW_RANGE / (ws.resolution / 2.0))) + 1
-    f = np.linspace(0.0, 1.0, steps)[:-1]  # the target's own sample left out
+    todo = np.ones((n, m), dtype=bool) if pairs is None else np.asarray(pairs, dtype=bool)
+    pe, pp = np.nonzero(todo)
+    if len(pe) == 0:
+        return out
+    cells = np.asarray(cells, dtype=np.int64)
     own = (cells[:, 0] * ny + cells[:, 1]) * nz + cells[:, 2]
-    flat_block = blocking.ravel()
-    pairs = np.argwhere(np.ones((n, m), dtype=bool))
-    for a in range(0, len(pairs), chunk):
-        pr = pairs[a:a + chunk]
-        e, p = eyes[pr[:, 0]], pts[pr[:, 1]]
-        samp = e[:, None, :] + f[None, :, None] * (p - e)[:, None, :]
-        c = np.floor((samp - lo) / ws.resolution).astype(np.int64)
-        i, j, k = c[..., 0], c[..., 1], c[..., 2]
-        inside = (i >= 0) & (j >= 0) & (k >= 0) & (i < nx) & (j < ny) & (k < nz)
-        idx = np.where(inside, (i * ny + j) * nz + k, 0)
-        hit = flat_block[idx] & inside & (idx != own[pr[:, 1]][:, None])
-        out[pr[:, 0], pr[:, 1]] = ~hit.any(axis=1)
+    ok = _los_kernel(np.ascontiguousarray(eyes, dtype=np.float64), ws.centers(cells), pe.astype(np.int64),
+                     pp.astype(np.int64), own, np.ascontiguousarray(blocking, dtype=np.bool_).ravel(),
+                     np.asarray(ws.min, dtype=np.float64), float(ws.resolution), nx, ny, nz)
+    out[pe, pp] = ok
     return out
 
 
@@ -380,14 +401,20 @@ def next_look(grid: PlanningGrid, cost: np.ndarray, start_cell: Sequence[int], t
     costs = dist[tuple(idx.T)]
     pts = ws.centers(pts_i)
     fov = in_view(eyes, yaws, pts, grid.robot.camera_half_vfov)
-    n_need = fov[:, kind == 0].sum(axis=1)
-    bound = (fov @ weight) / (costs + COST0) + 1e6 * (n_need > 0)  # seeing the goal itself comes first
+    is_need = kind == 0
+    # the goal's own cells first, for every candidate (few cells: cheap), then the rest for the best
+    need_seen = line_of_sight(grid, blocking, eyes, need, fov[:, is_need]) if len(need) else \
+        np.zeros((len(eyes), 0), dtype=bool)
+    n_need = need_seen.sum(axis=1)
+    bound = (NEED_WEIGHT * n_need + fov[:, ~is_need] @ weight[~is_need]) / (costs + COST0) + 1e6 * (n_need > 0)
     top = np.argsort(-bound, kind="stable")[:MAX_SCORED]
     top = top[bound[top] > 0]
     if len(top) == 0:
         return []
-    seen = line_of_sight(grid, blocking, eyes[top], pts_i) & fov[top]
-    seen_need = seen[:, kind == 0].sum(axis=1)
+    seen = np.zeros((len(top), len(pts_i)), dtype=bool)
+    seen[:, is_need] = need_seen[top]
+    seen[:, ~is_need] = line_of_sight(grid, blocking, eyes[top], pts_i[~is_need], fov[top][:, ~is_need])
+    seen_need = seen[:, is_need].sum(axis=1)
     gain = seen[:, kind > 0] @ weight[kind > 0]
     score = (seen @ weight) / (costs[top] + COST0) + 1e6 * seen_need
     order = np.argsort(-score, kind="stable")

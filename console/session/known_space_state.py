@@ -27,6 +27,7 @@ import numpy as np
 from pipeline.mapping.known_space import KnownSpace, KnownSpaceError, KnownState, unlabelled_cells
 from pipeline.scene import Scene, SceneObject
 from planner.grid import GridError, PlanningGrid, Workspace, build_grid
+from planner.robot_model import MORPHOGEAR
 
 from console.session.session_types import Notice, SessionError
 from console.session.topics import GRID, MISSION, ROUTE
@@ -41,11 +42,12 @@ UNKNOWN_POLICIES = ("closed", "allow")
 BODY_HEIGHT = 0.45
 """The robot's walking body height [m] kept free around it at each capture (MorphoGear's default)."""
 
-NEAR_FREE = 1.0
-"""Around where the robot stood at a capture, cells within this [m] in plan and up to its body height
-that no capture has seen are taken as free: the camera (0.35 m up, 24.5 degrees below the horizon at
-the edge of its view) cannot see the floor nearer than about 0.77 m, and the robot needs its radius
-(0.35 m) of known space around it to move at all. Cells a capture saw occupied keep that."""
+NEAR_FREE = MORPHOGEAR.radius + 0.25
+"""Around where the robot stood at a capture, cells within this [m] in plan (its footprint radius,
+0.35 m, plus one planning cell) and up to its body height that no capture has seen are taken as free:
+the robot's own cells are free by definition (it stands there), and the camera (0.35 m up, 24.5
+degrees below the horizon at the edge of its view) cannot see the floor nearer than about 0.77 m.
+Farther floor the camera did not see stays unknown. Cells a capture saw occupied keep that."""
 
 DEPTH_NOISE_REL = 0.05
 """Relative 1-sigma depth error [1] assumed for a depth model's scaled map (the simulator's is exact)."""
