@@ -14,8 +14,10 @@ from typing import Any, Callable
 import numpy as np
 import viser
 
+from console.session.operator_state import BATTERY_LOW
 from console.session.search import MODES, SearchConfig, SearchJob
-from console.session.session import JOB, RUN, Session, SessionError
+from console.session.search_types import BATTERY_RESERVE
+from console.session.session import JOB, RUN, SEARCH, Session, SessionError
 from console.views.client_notice import tell
 
 
@@ -38,11 +40,15 @@ class SearchView:
                                      hint="auto: moves on its own; step: each move waits for Approve step")
         self.captures = gui.add_number("Capture budget", 20, min=1, max=200, step=1)
         self.minutes = gui.add_number("Time budget [min]", 15.0, min=0.5, max=600.0, step=0.5)
+        self.reserve = gui.add_number("Battery reserve [%]", round(100 * BATTERY_RESERVE), min=round(100 * BATTERY_LOW),
+                                      max=95, step=1, hint="The search ends when the charge falls below this, before "
+                                      "the console's battery rules act (left to Return or land)")
         self.start = gui.add_button("Start search", icon=viser.Icon.SEARCH, color="blue",
                                     hint="Capture, choose the next viewpoint, go there, repeat until it is found")
         self.approve = gui.add_button("Approve step", icon=viser.Icon.CHECK, visible=False)
         self.pause = gui.add_button("Pause search", icon=viser.Icon.PLAYER_PAUSE, visible=False,
-                                    hint="End the move where the robot is (it holds); Resume plans again from there")
+                                    hint="End the move where the robot is (it holds); Hold, Land here and Return then "
+                                         "act; Resume plans again from there")
         self.resume = gui.add_button("Resume search", icon=viser.Icon.PLAYER_PLAY, visible=False)
         self.stop = gui.add_button("Stop search", icon=viser.Icon.PLAYER_STOP, visible=False)
         self.line = gui.add_markdown("")
@@ -62,10 +68,11 @@ class SearchView:
         try:
             captures = int(self.captures.value)
             minutes = float(self.minutes.value)
+            reserve = float(self.reserve.value) / 100.0
         except (TypeError, ValueError):
             raise SessionError("the budgets must be numbers") from None
         self._job.start(SearchConfig(target, mode=str(self.mode.value), max_captures=captures,
-                                     max_time=60.0 * minutes, target_height=self._height_of(target)))
+                                     max_time=60.0 * minutes, target_height=self._height_of(target), min_battery=reserve))
 
     def _act(self, event: Any, action: Callable[[], Any]) -> None:
         try:
@@ -75,7 +82,7 @@ class SearchView:
         self.refresh()
 
     def _on_event(self, topic: str, payload: Any) -> None:
-        if topic in (JOB, RUN):
+        if topic in (JOB, RUN, SEARCH):
             threading.Thread(target=self.refresh, daemon=True).start()  # never block the session's caller
 
     def drawn_viewpoint(self) -> Any:
@@ -95,6 +102,11 @@ class SearchView:
         r = job.result
         if r is not None and not running and r.reason:
             text = f"<b>{'found' if r.found else 'ended'}</b>: {html.escape(r.reason)} ({r.captures} captures, {r.path_length:.1f} m)"
+            if r.left_unseen:
+                text += f"<br>left unseen: {html.escape(r.left_unseen)}"
+        elif paused:
+            text = f"<b>paused</b> ({html.escape(job.pause_reason)}): Hold, Land here and Return act on the robot; " \
+                   "Resume plans again from where it is"
         else:
             text = html.escape(steps[-1]) if steps else ""
         self.line.content = f"<small>{text}</small>"
