@@ -39,13 +39,13 @@ from console.link.render import SceneRenderer
 from console.link.sim_camera import visible_objects
 from console.link.sim_config import DEFAULT_INTRINSICS, DEFAULT_MOUNT, SimConfig
 from console.link.sim_contact import BodyContact
-from console.session.known_space_state import BODY_HEIGHT, NEAR_FREE, near_free
-from console.session.search import CONFIRM_CAPTURES
+from console.session.known_space_state import BODY_HEIGHT, NEAR_FREE, grid_for, near_free
+from console.session.search_types import CONFIRM_CAPTURES
 from pipeline.camera.geometry import Intrinsics, Pose, camera_pose_in_world
 from pipeline.mapping.known_space import KnownSpace
 from pipeline.mapping.known_space_update import DepthNoise, capture_update
 from pipeline.scene import Scene, SceneObject
-from planner.grid import CostWeights, PlanningGrid, build_grid
+from planner.grid import CostWeights, PlanningGrid
 from planner.mission import heading_to
 from planner.object_goal import ObjectGoalError, goal_beside
 from planner.robot_model import MORPHOGEAR
@@ -153,7 +153,8 @@ class SimSearch:
         return out
 
     def grid(self, policy: str = "closed") -> PlanningGrid:
-        return build_grid(self.objects(), self.ws, robot=MORPHOGEAR, known=self.known, unknown=policy)
+        """The planning grid of the map so far, as the console builds it (``closed`` or ``allow`` unknown space)."""
+        return grid_for(Scene(objects=tuple(self.objects())), self.ws, MORPHOGEAR.radius, self.known, policy)
 
     def here(self) -> tuple[float, float, float]:
         return (self.pos[0], self.pos[1], max(self.pos[2], self.ws.floor))
@@ -222,6 +223,7 @@ class SimSearch:
                 p = a + (b - a) * i / k
                 if self._contact.blocked(tuple(prev), tuple(p)) is not None:
                     self.out.collisions += 1
+                    self.steps.append(f"contact at ({p[0]:.2f}, {p[1]:.2f}, {p[2]:.2f}) on the way to {goal} ({policy})")
                     self.pos = (float(prev[0]), float(prev[1]), float(prev[2]))
                     return f"contact with a true object at ({p[0]:.2f}, {p[1]:.2f}, {p[2]:.2f})"
                 d = p - prev
@@ -310,6 +312,7 @@ class SimSearch:
             if math.dist(here[:2], app.goal[:2]) < 0.2 and self.pos[2] < 0.1:
                 self.out.found = True
                 return "found"
+            self.steps.append(f"going beside {tid} at {app.goal} ({policy})")
             if self.move(tuple(float(v) for v in app.goal), policy) is None:
                 self.out.found = True
                 return "found"

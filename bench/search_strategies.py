@@ -1,9 +1,10 @@
 """The search benchmark's strategies: how each picks the next viewpoint in a :class:`bench.search_sim.SimSearch`.
 
-- ``search``: the product's choice, as :meth:`console.session.search.SearchJob._choose` makes it:
-  :func:`planner.search_viewpoints.score_viewpoints` over seen-free space (its gain at least
-  :data:`~console.session.search.GAIN_MIN`), else over unknown space too (the route may cross it);
-  the cells earlier captures had in view that stayed unknown count no more.
+- ``search``: the product's choice, the console's own
+  :func:`console.session.search_choose.choose_viewpoint` (on a view of the simulated search as its
+  session): :func:`planner.search_viewpoints.score_viewpoints` over seen-free space (its gain at
+  least :data:`~console.session.search_types.GAIN_MIN`), else over unknown space too (the route may
+  cross it); the cells earlier captures had in view that stayed unknown count no more.
 - ``frontier``: nearest frontier on the floor only (:func:`planner.search_baselines.nearest_frontier_ground`).
 - ``random``: random reachable seen-free viewpoints (:func:`planner.search_baselines.random_viewpoint`).
 - ``manual``: the paper's manual strategy (:func:`planner.search_baselines.farthest_seen_free`):
@@ -18,10 +19,13 @@ from __future__ import annotations
 from typing import Callable
 
 from bench.search_sim import SimSearch
-from console.session.search import GAIN_MIN
+from console.session.search_choose import GridCache, choose_viewpoint
+from pipeline.scene import Scene
+from planner.grid import CostWeights
+from planner.robot_model import MORPHOGEAR
 from planner.route import Route
 from planner.search_baselines import farthest_seen_free, nearest_frontier_ground, random_viewpoint
-from planner.search_viewpoints import Viewpoint, score_viewpoints
+from planner.search_viewpoints import Viewpoint
 
 Pick = "tuple[Viewpoint, str] | None"
 
@@ -32,17 +36,26 @@ def _closed(sim: SimSearch):
     return sim.known.state(), grid, Route(grid, here).cost_array, grid.workspace.cell_of(here)
 
 
+class SessionView:
+    """What :func:`console.session.search_choose.choose_viewpoint` reads of the console's session, from a
+    simulated search (its map, known space and planning rule: unknown space closed)."""
+
+    def __init__(self, sim: SimSearch) -> None:
+        self.known_space = sim.known
+        self.workspace = sim.ws
+        self.margin = MORPHOGEAR.radius
+        self.weights = CostWeights()
+        self.plan_unknown = "closed"
+        self.scene = Scene(objects=tuple(sim.objects()))
+        self.grid = sim.grid("closed")
+
+
 def product(sim: SimSearch) -> tuple[Viewpoint, str] | None:
-    state = sim.known.state()
-    here = sim.here()
-    for policy in ("closed", "allow"):
-        grid = sim.grid(policy)
-        cost = Route(grid, here).cost_array
-        vps = score_viewpoints(state, grid, cost, grid.workspace.cell_of(here), sim.target_height,
-                               seen_only=policy == "closed", limit=3, looked=sim.looked)
-        if vps and vps[0].gain >= GAIN_MIN:
-            return vps[0], policy
-    return None
+    """The console's own choice (:func:`console.session.search_choose.choose_viewpoint`)."""
+    choice = choose_viewpoint(SessionView(sim), sim.here(), sim.target_height, sim.looked, GridCache())
+    if choice.viewpoint is None:
+        return None
+    return choice.viewpoint, "allow" if choice.unknown else "closed"
 
 
 def frontier(sim: SimSearch) -> tuple[Viewpoint, str] | None:

@@ -4,7 +4,6 @@ ceiling), cost by the planner's own costs (walking cheaper than flying), field-n
 from __future__ import annotations
 
 import math
-import time
 
 import numpy as np
 import pytest
@@ -77,11 +76,9 @@ def test_viewpoints_walk_when_walking_sees_it_and_costs_are_the_planners() -> No
     assert d[one] == pytest.approx(1.0, abs=0.01)
     air = WS.cell_of((2.5, 0.7, 1.6))
     assert d[air] > 5.0
-    t0 = time.perf_counter()
-    vps = score_viewpoints(known.state(), grid, cost, cell, 0.4, limit=3)
-    assert time.perf_counter() - t0 < 5.0  # generous: a loaded machine; the benchmark times it
+    vps = score_viewpoints(known.state(), grid, cost, cell, 0.4, limit=3)  # its time: bench/search.py
     assert vps and vps[0].mode == "walk" and vps[0].goal[1] > 2.5  # walks up to the frontier
-    assert math.degrees(vps[0].yaw) % 360 == pytest.approx(90.0, abs=35.0)
+    assert math.sin(vps[0].yaw) > 0.5  # faces into the unknown half (+y), straight or across it
     assert "m³ of unknown space" in vps[0].why and "path cost" in vps[0].why
     assert [v.score for v in vps] == sorted((v.score for v in vps), reverse=True)
 
