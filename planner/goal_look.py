@@ -43,7 +43,7 @@ from scipy import ndimage
 from planner.astar import AStarSearcher
 from planner.cspace import cube_ball, dilate
 from planner.grid import Closed, CostWeights, GridError, PlanningGrid, build_grid
-from planner.search_viewpoints import COST0, UNKNOWN, blocking_cells, path_costs
+from planner.search_viewpoints import UNKNOWN, blocking_cells, path_costs
 
 Vec3 = tuple[float, float, float]
 
@@ -74,6 +74,8 @@ REPEAT_DISTANCE = 0.75
 """A candidate this close [m] to an earlier capture's camera ..."""
 REPEAT_YAW = math.radians(45.0)
 """... facing within this of its heading [rad] is not suggested again."""
+COST0 = 2.0
+"""Added to the path cost in the score [cost·m] (two metres of walking): near spots are not free."""
 MAX_SCORED = 250
 """Candidates whose lines of sight are cast (the best by field-of-view count per cost)."""
 MAX_NEIGHBOURS = 400

@@ -90,3 +90,37 @@ def test_go_look_refuses_bad_goals_and_a_busy_robot(rig) -> None:
         rig.go_look.start((float("nan"), 1.0))
     with pytest.raises(SessionError, match="outside the workspace"):
         rig.go_look.start((9.0, 1.0))
+
+
+def _wait_for(pred, what: str, timeout: float = 600.0) -> None:
+    end = time.monotonic() + timeout
+    while time.monotonic() < end:
+        if pred():
+            return
+        time.sleep(0.05)
+    raise AssertionError(f"timed out waiting for {what}")
+
+
+def test_pause_holds_the_move_resume_finishes_the_look_and_stop_aborts(rig) -> None:
+    s, job = rig.session, rig.go_look
+    assert rig.mapping.run_as("start")
+    job.start(GOAL[:2])
+    _wait_for(lambda: s.run.state == "running", "the move to the first look")
+    job.pause()
+    _wait_for(lambda: s.run.state == "paused", "the move to pause")
+    assert job.paused and job.running
+    _wait_for(lambda: math.hypot(*rig.robot.latest_state().velocity) < 0.02, "the robot to hold", 60)
+    with pytest.raises(SessionError, match="already running"):
+        job.start(GOAL[:2])
+    job.resume()
+    assert job.wait(900)
+    assert job.outcome.looks == 1 and s.job.error is None, job.outcome.message
+    # the next look, stopped on its way: the move is aborted, the look ends, no capture taken
+    captures = len(s.scene.captures)
+    job.start(GOAL[:2])
+    _wait_for(lambda: s.run.state == "running" or not job.running, "the move to the next look")
+    assert job.running, job.outcome.message  # the next look is elsewhere: a move is under way
+    job.stop()
+    assert job.wait(120)
+    assert "stopped" in job.outcome.message and s.run.state == "aborted", (job.outcome.message, s.run)
+    assert len(s.scene.captures) == captures
