@@ -1,0 +1,123 @@
+"""Find with the operator in charge, in a real headless browser (Playwright, Debian's Chromium): fresh
+session, the simulated robot in the paper's room (hidden; ground-truth perception). Find: robot dog in
+automatic mode; when the robot has flown over the line of boxes the operator pauses the search (the robot
+holds in the air, over floor no capture has seen), presses Land here (during a search it lands on the
+nearest floor seen free), then Resume: the search goes on from where the robot landed (walking, taking off
+again) and still finds the dog, ending within 1 m of it with no refusal or contact from the simulator.
+Every step waits on state, never on time, with generous deadlines (the machine is shared). Skipped with
+the reason when Chromium or Playwright is missing."""
+
+from __future__ import annotations
+
+import math
+import tempfile
+from pathlib import Path
+from typing import Any, Callable
+
+import pytest
+
+from console.app import ConsoleApp, ConsoleConfig, wait_until
+from console.session.session import NOTICE, SEARCH
+from tests.console.e2e.test_console_e2e import BROWSER_ARGS, CHROMIUM, VIEWPORT, needs_browser
+
+LONG = 120_000  # [ms] page waits on a loaded machine
+DOG = (2.5, 6.3)
+pytestmark = needs_browser
+
+
+def _wait(predicate: Callable[[], bool], what: str, timeout: float = 600.0) -> None:
+    assert wait_until(predicate, timeout, 0.05), f"timed out waiting for {what}"
+
+
+@pytest.fixture()
+def console(tmp_path: Path):
+    from console.link.sim import SimConfig, SimRobot
+
+    # the paper's room, hidden; simulated time runs 8x the wall clock, so on a loaded machine the hovering
+    # while a capture is mapped drains the battery 8x faster than the robot's work does: drain as in a quiet run
+    robot = SimRobot(config=SimConfig(time_scale=8.0, drain_fly=2e-4, drain_walk=2e-5))
+    app = ConsoleApp(ConsoleConfig(robot="sim", session_dir=tmp_path / "session", scene_dir=tmp_path / "scenes",
+                                   port=0, fresh=True, record=False), link=robot)
+    app.start()
+    try:
+        yield app
+    finally:
+        app.stop()
+
+
+def _button(page: Any, name: str) -> Any:
+    b = page.get_by_role("button", name=name, exact=True).first
+    b.scroll_into_view_if_needed(timeout=LONG)
+    return b
+
+
+def test_pause_land_here_and_resume_mid_search_still_finds_the_robot_dog(console: ConsoleApp, tmp_path: Path) -> None:
+    from playwright.sync_api import expect, sync_playwright
+
+    app = console
+    s = app.session
+    notices: list[str] = []
+    events: list[dict[str, Any]] = []
+    s.subscribe(lambda t, p: notices.append(f"{p.title}: {p.body}") if t == NOTICE else None)
+    s.subscribe(lambda t, p: events.append(p) if t == SEARCH else None)
+
+    def here() -> tuple[float, float, float]:
+        return tuple(float(v) for v in app.link.latest_state().position)  # type: ignore[return-value]
+
+    pw = sync_playwright().start()
+    ctx = pw.chromium.launch_persistent_context(tempfile.mkdtemp(prefix="chromium-", dir=tmp_path),
+                                                executable_path=str(CHROMIUM), headless=True, args=BROWSER_ARGS,
+                                                viewport=VIEWPORT)
+    try:
+        page = ctx.new_page()
+        page.goto(app.url)
+        page.get_by_role("button", name="Capture & map").wait_for(timeout=LONG)
+        _wait(lambda: len(app.server.get_clients()) >= 1, "the page to connect", 60)
+        _wait(lambda: s.robot is not None, "the robot's first state", 60)
+        page.get_by_text("Find", exact=True).first.click(timeout=LONG)  # open the folder
+        budget = page.get_by_label("Capture budget", exact=True)  # room for the captures after the landing
+        budget.scroll_into_view_if_needed(timeout=LONG)
+        budget.fill("30")
+        budget.press("Tab")
+        _wait(lambda: int(app.views["search"].captures.value) == 30, "the capture budget to reach the console", 60)
+        _button(page, "Start search").click(timeout=LONG)
+        _wait(lambda: app.search.running, "the search to start", 60)
+
+        # --- pause once the robot has flown over the line of boxes -----------------------------------------
+        _wait(lambda: (lambda p: p[1] > 4.2 and p[2] > 0.5)(here()) or not app.search.running,
+              "a flight over the line of boxes", 1200)
+        assert app.search.running, (app.search.result.reason, app.search.result.battery, app.search.steps[-4:])
+        _button(page, "Pause search").click(timeout=LONG)
+        _wait(lambda: app.search.paused and not s.run.active, "the move to end where the robot is")
+        held = here()
+        assert held[2] > 0.5, held  # holding in the air
+        _wait(lambda: events and events[-1].get("kind") == "paused", "the search to say it is paused", 120)
+
+        # --- Land here: on the nearest floor seen free ------------------------------------------------------
+        land = _button(page, "Land here")
+        expect(land).to_be_enabled(timeout=LONG)
+        land.click(timeout=LONG)
+        _wait(lambda: s.run.state == "done" and here()[2] < 0.05, "the landing", 600)
+        landed = here()
+        from console.session.operator_state import unseen_floor
+
+        assert not unseen_floor(landed, s.grid), landed  # on floor a capture saw free
+
+        # --- Resume: from where it landed, on to the dog -------------------------------------------------
+        resume = _button(page, "Resume search")
+        expect(resume).to_be_visible(timeout=LONG)
+        resume.click(timeout=LONG)
+        _wait(lambda: not app.search.paused, "the search to resume", 120)
+        _wait(lambda: not app.search.running, "the search to end", 1800)
+        r = app.search.result
+        assert r is not None and r.found and r.target_id == "robot_dog-1", (r.reason, r.battery, app.search.steps[-6:])
+        end = here()
+        assert math.dist(end[:2], DOG) < 1.0, end
+        resumed = [e for e in events if e.get("kind") == "resumed"]
+        assert resumed and math.dist(resumed[0]["robot"][:2], landed[:2]) < 0.2  # planned again from the landing
+        assert not any("refused" in n or "contact with" in n for n in notices), notices
+        page.get_by_text("found").first.wait_for(timeout=LONG)  # the panel's end line
+        page.screenshot(path=str(tmp_path / "find-paused.png"))
+    finally:
+        ctx.close()
+        pw.stop()
