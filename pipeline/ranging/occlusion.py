@@ -85,13 +85,17 @@ def contact_as_bound(cues: Sequence[Cue], sigmas: float = FARTHER_SIGMAS
                      ) -> tuple[list[Cue], tuple[float, float] | None]:
     """``(cues to fuse, upper bound)`` for an object whose floor contact may be hidden: the
     ``ground_contact`` cue is moved into a bound ``(distance, sigma)`` [m] when it is farther than the
-    inverse-variance fusion of the other cues by more than ``sigmas`` (log distance, combined sigma);
+    inverse-variance fusion of the other cues by more than ``sigmas`` (log distance, combined sigma; the
+    others' sigma grown by their Birge ratio when they disagree among themselves, as the fusion does);
     otherwise the cues unchanged and no bound. Without other cues nothing changes."""
     gc = next((c for c in cues if c.name == "ground_contact"), None)
     others = [c for c in cues if c is not gc]
     if gc is None or not others:
         return list(cues), None
     l_o, s_o = combine_log(others)
+    if len(others) >= 2:  # others that disagree among themselves know less than their sigmas say (Birge ratio)
+        chi2 = sum(((math.log(c.distance) - l_o) / c.rel_sigma) ** 2 for c in others)
+        s_o *= max(1.0, math.sqrt(chi2 / (len(others) - 1)))
     r = (math.log(gc.distance) - l_o) / math.sqrt(gc.rel_sigma**2 + s_o**2)
     if r <= sigmas:
         return list(cues), None
