@@ -48,13 +48,21 @@ def _wait(predicate: Any, what: str, timeout: float = 90.0) -> None:
 
 
 def _title(page: Any, name: str, pattern: str) -> str:
-    """The hover text (title) of button ``name`` once it matches ``pattern`` (the page script copies it)."""
-    button = page.get_by_role("button", name=name, exact=True)
-    button.wait_for(timeout=LONG)
-    from playwright.sync_api import expect
+    """The hover text (title) of button ``name`` once it matches ``pattern`` (the page script copies it).
 
-    expect(button).to_have_attribute("title", re.compile(pattern), timeout=LONG)
-    return str(button.get_attribute("title"))
+    Read again until it matches: the panel may redraw (and the page script copy the text again) in between."""
+    button = page.get_by_role("button", name=name, exact=True)
+    seen: list[str] = []
+
+    def matches() -> bool:
+        try:
+            seen.append(str(button.get_attribute("title", timeout=5_000)))
+        except Exception:  # redrawn meanwhile: read again
+            return False
+        return re.search(pattern, seen[-1]) is not None
+
+    assert wait_until(matches, LONG / 1000, 0.2), f"{name}: no hover text matching {pattern!r} (last: {seen[-1:]})"
+    return seen[-1]
 
 
 @needs_browser
@@ -76,6 +84,7 @@ def test_fields_by_label_disabled_buttons_say_why_return_says_where_and_the_hove
                 permissions=["clipboard-read", "clipboard-write"])
             try:
                 page = ctx.new_page()
+                page.set_default_timeout(LONG)  # every action: a page on a loaded machine can stall for many seconds
                 page.goto(app.url)
                 page.get_by_role("button", name="Build mission").wait_for(timeout=LONG)
                 page.add_style_tag(content=HIDE_NOTICES)  # pop-ups must not cover the buttons under test
