@@ -349,6 +349,19 @@ def _repeats(eyes: np.ndarray, yaws: np.ndarray, avoid: Sequence[tuple[Sequence[
     return bad
 
 
+def _some_look_sees(grid: PlanningGrid, blocking: np.ndarray, eyes: np.ndarray, need: np.ndarray,
+                    target: Sequence[float], avoid: list) -> bool:
+    """Whether any candidate camera ``eyes``, facing the target, sees a needed cell (then no chain is needed)."""
+    if len(need) == 0 or len(eyes) == 0:
+        return False
+    yaws = np.arctan2(float(target[1]) - eyes[:, 1], float(target[0]) - eyes[:, 0])
+    keep = ~_repeats(eyes, yaws, avoid) & (np.hypot(target[0] - eyes[:, 0], target[1] - eyes[:, 1]) >= 0.25)
+    if not keep.any():
+        return False
+    fov = in_view(eyes[keep], yaws[keep], grid.workspace.centers(need), grid.robot.camera_half_vfov)
+    return bool(fov.any() and line_of_sight(grid, blocking, eyes[keep], need, fov).any())
+
+
 def next_look(grid: PlanningGrid, cost: np.ndarray, start_cell: Sequence[int], target: Sequence[float], *,
               state: np.ndarray | None = None, avoid: Iterable[tuple[Sequence[float], float]] = (),
               limit: int = 1) -> list[Look]:
@@ -374,8 +387,17 @@ def next_look(grid: PlanningGrid, cost: np.ndarray, start_cell: Sequence[int], t
     blocking = blocking_cells(st, grid)
     need = needed_cells(grid, st, t)
     dist = path_costs(grid, cost, start_cell)
-    spots_at, _ = spots_to_open(grid, st, t, need, blocking)
-    spots, spot_w, stretch = cells_to_open(grid, cost, start_cell, st, spots_at)
+    # cells opened only as the robot's own (free by definition where it is) are no place to go to
+    ok = np.isfinite(dist) & np.isfinite(grid.cost(CostWeights()))
+    ok[tuple(int(v) for v in start_cell)] = bool(np.isfinite(dist[tuple(int(v) for v in start_cell)]))
+    idx = np.argwhere(ok)
+    eyes, ground = _eyes_of(grid, idx)
+    empty = np.zeros((0, 3), dtype=np.int64)
+    spots, spot_w, stretch = empty, np.zeros(0), empty
+    if not _some_look_sees(grid, blocking, eyes, need, t, avoid := list(avoid)):
+        # the chain: the space to open so that a later look sees the goal
+        spots_at, _ = spots_to_open(grid, st, t, need, blocking)
+        spots, spot_w, stretch = cells_to_open(grid, cost, start_cell, st, spots_at)
     if len(spots):
         fresh = ~(need[:, None, :] == spots[None, :, :]).all(axis=2).any(axis=0) if len(need) else \
             np.ones(len(spots), dtype=bool)
@@ -387,16 +409,11 @@ def next_look(grid: PlanningGrid, cost: np.ndarray, start_cell: Sequence[int], t
         return []
     kind = np.concatenate([np.zeros(len(need)), np.ones(len(spots)), np.full(len(nb), 2)])
     weight = np.concatenate([np.full(len(need), NEED_WEIGHT), spot_w, nb_w])
-    # cells opened only as the robot's own (free by definition where it is) are no place to go to
-    ok = np.isfinite(dist) & np.isfinite(grid.cost(CostWeights()))
-    ok[tuple(int(v) for v in start_cell)] = bool(np.isfinite(dist[tuple(int(v) for v in start_cell)]))
-    idx = np.argwhere(ok)
-    eyes, ground = _eyes_of(grid, idx)
     # two headings each: towards the goal, and towards the middle of the spots to open
     aims = [np.asarray(t[:2])] + ([ws.centers(stretch)[:, :2].mean(axis=0)] if len(stretch) else [])
     yaws = np.concatenate([np.arctan2(a[1] - eyes[:, 1], a[0] - eyes[:, 0]) for a in aims])
     idx, eyes, ground = (np.concatenate([v] * len(aims)) for v in (idx, eyes, ground))
-    keep = ~_repeats(eyes, yaws, list(avoid)) & (np.hypot(t[0] - eyes[:, 0], t[1] - eyes[:, 1]) >= 0.25)
+    keep = ~_repeats(eyes, yaws, avoid) & (np.hypot(t[0] - eyes[:, 0], t[1] - eyes[:, 1]) >= 0.25)
     idx, eyes, yaws, ground = idx[keep], eyes[keep], yaws[keep], ground[keep]
     if len(idx) == 0:
         return []
