@@ -16,11 +16,12 @@ from dataclasses import dataclass
 from typing import Any, Sequence
 
 from pipeline.scene import Scene
-from planner.grid import PlanningGrid
+from planner.grid import GridError, PlanningGrid
 from planner.mission import Mission
 from planner.route import Route
 
 from console.session.capture_files import read_capture_files
+from console.session.known_space_state import grid_for
 from console.session.session_core import SessionCore
 from console.session.session_types import CaptureRecord, SessionError
 from console.session.topics import CAPTURE, GRID, MISSION, ROUTE, SCENE, SELECTION
@@ -201,9 +202,6 @@ class Undo(SessionCore):
         notes: list[str] = []
         grid = state.grid
         if grid is None:
-            from console.session.known_space_state import grid_for
-            from planner.grid import GridError
-
             try:
                 grid = grid_for(state.scene, self._workspace, self._margin, state.known,
                                 getattr(self, "_plan_unknown", "closed"))
