@@ -301,6 +301,9 @@ class GoLookJob:
                 self._end(f"the capture failed: {job.error or job.message}", "error")
                 return
             out.looks += 1
+            if self._stop.is_set():
+                self._end("stopped by the operator after the capture", "info")
+                return
             self._retry(goal, look)
         except Exception as exc:  # a bug or a link error: report it, keep the console alive
             log.exception("go look failed")
