@@ -213,6 +213,12 @@ def _rotate(g0: np.ndarray, pitch: float, roll: float) -> np.ndarray:
     return np.array([x, y, z])
 
 
+def rotate_gravity(g: Sequence[float], pitch: float, roll: float) -> np.ndarray:
+    """Gravity (camera frame) after pitching the camera by ``pitch`` (about x) and rolling it by ``roll``
+    (about the optical axis) [rad], as the fit's angles are defined."""
+    return _rotate(np.asarray(g, dtype=np.float64), pitch, roll)
+
+
 def _rays(uv: np.ndarray, intr: Intrinsics) -> np.ndarray:
     """Rays ``(x_n, y_n, 1)`` (N x 3) through undistorted pixels."""
     p = intr.undistort_pixels(np.asarray(uv, dtype=np.float64).reshape(-1, 2))
@@ -427,4 +433,4 @@ def disagreement(given: FloorPrior, fitted: FloorEstimate) -> float:
 
 
 __all__ = ["Contact", "DepthPlane", "FloorEstimate", "FloorFitError", "FloorPrior", "MIN_PLANE_ANGLE_SIGMA",
-           "UNKNOWN_POSE_PRIOR", "contact_sigma", "disagreement", "fit_floor", "plane_from_depth"]
+           "UNKNOWN_POSE_PRIOR", "contact_sigma", "disagreement", "fit_floor", "plane_from_depth", "rotate_gravity"]

@@ -102,4 +102,15 @@ def contact_as_bound(cues: Sequence[Cue], sigmas: float = FARTHER_SIGMAS
     return others, (gc.distance, gc.sigma)
 
 
-__all__ = ["FARTHER_SIGMAS", "MARGIN_FRAC", "contact_as_bound", "MIN_COVER", "MIN_MARGIN_PX", "bottom_occluders", "hides_bottom"]
+def mark_hidden_contacts(objects: Sequence[object]) -> None:
+    """Note on every measured object (:class:`pipeline.ranging.ranger.MappedObject`) with a floor contact a
+    detection that may hide its bottom edge (:func:`bottom_occluders`), or ``"image border"`` for a box a
+    side border cuts (it hides the bottom's part beyond it, often the nearest: an object off-axis); the
+    fusion then may take the contact for an upper bound (:func:`contact_as_bound`)."""
+    live = [o for o in objects if not o.skipped]  # type: ignore[attr-defined]
+    for obj, occ in zip(live, bottom_occluders([o.detection.box for o in live])):  # type: ignore[attr-defined]
+        if obj.cue("ground_contact") is not None and (occ is not None or obj.truncation.horizontal_cut):  # type: ignore[attr-defined]
+            obj.contact_hidden_by = live[occ].detection.label if occ is not None else "image border"  # type: ignore[attr-defined]
+
+
+__all__ = ["FARTHER_SIGMAS", "mark_hidden_contacts", "MARGIN_FRAC", "contact_as_bound", "MIN_COVER", "MIN_MARGIN_PX", "bottom_occluders", "hides_bottom"]

@@ -28,10 +28,11 @@ from pipeline.ranging.distance import (
 from pipeline.ranging.fusion import Cue, Fused, fuse_cues
 from pipeline.camera.geometry import Intrinsics
 from pipeline.ranging.ground_contact import GroundModel, border_bound, ground_contact_cue
+from pipeline.ranging.gravity_spread import gravity_sigma_z, widen_for_gravity
 from pipeline.mapper_config import MIN_DEPTH_SIGMA, MapperConfig
 from pipeline.ranging.measured_height import HeightEstimate, estimate_height
 from pipeline.models.base import DepthMap, Detection
-from pipeline.ranging.occlusion import bottom_occluders, contact_as_bound
+from pipeline.ranging.occlusion import contact_as_bound, mark_hidden_contacts
 from pipeline.ranging.orientation import length_axis_from_points
 from pipeline.ranging.placement import GeometricEstimate, centre_on_ray, geometric_estimate
 from pipeline.regions import box_mask, region_box, region_centre, region_width
@@ -185,15 +186,21 @@ class Ranger:
                 if vals.size:
                     obj.depth_span = (float(np.percentile(vals, 2)), float(np.percentile(vals, 98)))
         if cfg.fusion == "sigma":
-            self._geometric_cues(obj, intr, h, self.ground if ground is SAME_GROUND else ground)  # type: ignore[arg-type]
+            self._geometric_cues(obj, intr, h, self.ground if ground is SAME_GROUND else ground, gravity)  # type: ignore[arg-type]
         return obj
 
     def _geometric_cues(self, obj: MappedObject, intr: Intrinsics, image_height: int,
-                        ground: GroundModel | None) -> None:
-        """The cues that need no depth map: size prior and floor contact (or the border's bound)."""
-        box = obj.detection.box
+                        ground: GroundModel | None, gravity: np.ndarray) -> None:
+        """The cues that need no depth map: size prior (widened by a fitted gravity's own uncertainty,
+        :mod:`pipeline.ranging.gravity_spread`) and floor contact (or the border's bound)."""
+        box, cfg = obj.detection.box, self.config
         if obj.geometric is not None:
-            obj.cues.append(size_prior_cue(obj.geometric, box, obj.truncation, obj.size, obj.spread, focal=(intr.fx, intr.fy)))
+            sp = size_prior_cue(obj.geometric, box, obj.truncation, obj.size, obj.spread, focal=(intr.fx, intr.fy))
+            if ground is not None and ground.floor is not None:  # the gravity was fitted: it is uncertain
+                sp = widen_for_gravity(sp, gravity_sigma_z(box, obj.size, intr, obj.truncation, gravity, ground.floor,
+                                                           cfg.placement, size_sigma=cfg.size_sigma,
+                                                           horizontal_sigma_scale=cfg.horizontal_sigma_scale))
+            obj.cues.append(sp)
         if ground is None or not obj.on_floor or not self.config.ground_contact:
             return
         x1, y1, x2, y2 = box
@@ -217,16 +224,7 @@ class Ranger:
             obj.ground_center = got[1]
 
 
-    @staticmethod
-    def mark_hidden_contacts(objects: list[MappedObject]) -> None:
-        """Note, for every object with a floor contact, a detection that may hide its bottom edge
-        (:func:`pipeline.ranging.occlusion.bottom_occluders`); the fusion then may take the contact for an
-        upper bound (:func:`pipeline.ranging.occlusion.contact_as_bound`)."""
-        live = [o for o in objects if not o.skipped]
-        for obj, occ in zip(live, bottom_occluders([o.detection.box for o in live])):
-            if obj.cue("ground_contact") is not None and (occ is not None or obj.truncation.horizontal_cut):
-                # a side border hides the bottom's part beyond it, often the nearest (an object off-axis)
-                obj.contact_hidden_by = live[occ].detection.label if occ is not None else "image border"
+    mark_hidden_contacts = staticmethod(mark_hidden_contacts)
 
     def depth_scale(self, objects: list[MappedObject], depth_map: DepthMap | None) -> DepthScale | None:
         """Metric conversion of the depth map, fitted from the objects of known size when configured."""
