@@ -135,9 +135,10 @@ class SearchJob(SearchMoves):
             self._approve.clear()
             self._path, self._last_pos = 0.0, tuple(float(v) for v in st.position)
             self._looked = None
+            self._t0 = time.monotonic()
+            self._land_nearest(True)  # before the thread: its end turns it off
             self._thread = threading.Thread(target=self._run, name="search", daemon=True)
             self._thread.start()
-        self._land_nearest(True)
 
     def pause(self) -> None:
         """Pause: the move under way ends where the robot is (it holds); Hold / Land here / Return are
