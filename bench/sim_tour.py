@@ -30,6 +30,7 @@ import numpy as np  # noqa: E402
 from scipy.optimize import linear_sum_assignment  # noqa: E402
 
 from console.link.sim import SimRobot  # noqa: E402
+from console.link.sim_perception_noise import PerceptionNoise  # noqa: E402
 from console.link.world import paper_room  # noqa: E402
 from legacy_merge import merge_observations  # noqa: E402
 from pipeline.catalog import default_catalog  # noqa: E402
@@ -39,6 +40,7 @@ from pipeline.mapping.map_fusion import fuse  # noqa: E402
 from pipeline.mapping.map_support import FLOOR_ONLY  # noqa: E402
 from pipeline.mapper import Mapper  # noqa: E402
 from pipeline.scene import Scene  # noqa: E402
+from planner.grid import Workspace  # noqa: E402
 
 GOOD: list[tuple[float, float, float]] = [
     (2.5, 0.7, math.pi / 2), (1.0, 1.0, math.pi / 2 - 0.4), (4.2, 0.9, math.pi / 2 + 0.5),
@@ -55,6 +57,21 @@ BAD: list[tuple[float, float, float]] = [
 TOUR = GOOD[:2] + BAD[:1] + GOOD[2:4] + BAD[1:] + GOOD[4:]
 """The tour, in capture order (10 poses)."""
 
+SIDE_AND_FAR: list[tuple[float, float, float]] = [
+    (4.12, 1.12, math.pi),  # from the right wall facing -x: desk-1 partly hidden by its chair, at the image edge
+    (4.2, 2.0, math.pi / 2),  # a close-up of desk-2: its box cut on three sides, 0.85 m away
+    (0.4, 2.0, 0.0), (4.7, 1.6, math.pi - 0.3), (0.3, 0.3, math.pi / 4),  # the sides and a corner, in front of the line
+    (2.5, 7.6, -math.pi / 2), (1.4, 7.6, -math.pi / 2 + 0.4), (4.0, 7.5, -math.pi / 2 - 0.4),  # the far end
+    (0.4, 5.5, 0.0), (4.5, 5.0, math.pi),  # the sides behind the line
+]
+"""Robot poses from the sides and the far end of the room, captured after :data:`TOUR`."""
+
+EXTENDED = TOUR + SIDE_AND_FAR
+"""The extended tour (20 poses): :data:`TOUR`, then :data:`SIDE_AND_FAR`."""
+
+WORKSPACE = Workspace()
+"""The planning workspace of the paper's room (5 x 8 x 3 m from the origin, world frame)."""
+
 MATCH_RADIUS = 1.0
 """A mapped object farther than this from every true object of its label is a false object [m]."""
 
@@ -69,25 +86,11 @@ def shoot(pose: Sequence[float], cid: str, rng: np.random.Generator | None) -> t
         robot.close()
     gt = shot.ground_truth
     h, w = shot.image.shape[:2]
-    boxes, labels, masks = [], [], []
-    for v in gt.visible:
-        if rng is not None and rng.random() < 0.1:
-            continue  # missed
-        b = np.asarray(v.bbox, dtype=np.float64)
-        if rng is not None:
-            b = np.clip(b + rng.normal(0.0, 2.0, 4), 0, [w, h, w, h])
-            b = np.array([min(b[0], b[2]), min(b[1], b[3]), max(b[0], b[2]) + 1, max(b[1], b[3]) + 1])
-        boxes.append(b)
-        labels.append(v.label)
-        masks.append(gt.instances == v.index)
-    if rng is not None and rng.random() < 0.4:  # a false detection
-        bw, bh = rng.uniform(30, 120, 2)
-        x0, y0 = rng.uniform(0, w - bw), rng.uniform(h / 3, h - bh)
-        boxes.append(np.array([x0, y0, x0 + bw, y0 + bh]))
-        labels.append(str(rng.choice(["office_chair", "suitcase", "compressor"])))
-        m = np.zeros((h, w), dtype=bool)
-        m[int(y0):int(y0 + bh), int(x0):int(x0 + bw)] = True
-        masks.append(m)
+    boxes = [v.bbox for v in gt.visible]
+    labels = [v.label for v in gt.visible]
+    masks = [gt.instances == v.index for v in gt.visible]
+    if rng is not None:
+        boxes, labels, masks = PerceptionNoise().apply(boxes, labels, masks, (w, h), rng)  # type: ignore[assignment]
     with Mapper(ground_truth_bundle(boxes, labels, masks, gt.depth), default_catalog()) as mapper:
         res = mapper.run(shot.image, shot.intrinsics, shot.mount, shot.robot_pose, capture_id=cid)
     return res.scene, {v.id for v in gt.visible}
@@ -119,8 +122,9 @@ def evaluate(scene: Scene, in_view: set[str]) -> dict[str, float]:
                 dup += cost[r].min() <= MATCH_RADIUS
                 false += cost[r].min() > MATCH_RADIUS
     off_floor = sum(1 for o in scene.objects if o.label in FLOOR_ONLY and abs(o.position[2] - o.size[1] / 2) > 0.05)
+    outside = sum(1 for o in scene.objects if not WORKSPACE.contains(o.position))
     e = np.array(errors)
-    return {"mapped": len(scene.objects), "in_view": len(in_view), "once": len(in_view & matched),
+    return {"mapped": len(scene.objects), "outside": outside, "in_view": len(in_view), "once": len(in_view & matched),
             "missing": len(in_view - matched), "missing_ids": sorted(in_view - matched), "duplicates": dup, "false": false,
             "median": float(np.median(e)), "p95": float(np.percentile(e, 95)), "off_floor": off_floor}
 
@@ -130,7 +134,7 @@ Merge = Callable[[Scene, Scene], "tuple[Scene, bool]"]
 
 
 def _fused(scene: Scene, obs: Scene) -> tuple[Scene, bool]:
-    merged, report = fuse(scene, obs)
+    merged, report = fuse(scene, obs, bounds=(WORKSPACE.min, WORKSPACE.max))
     return merged, report.held_back is not None
 
 
@@ -161,6 +165,9 @@ def add_tour_options(parser: argparse.ArgumentParser) -> None:
                         help="add perception noise: box jitter N(0, 2 px) per side, 10 %% missed detections, "
                              "a false detection in 40 %% of the captures")
     parser.add_argument("--seed", type=_seed, default=1, help="random seed of the noise (default 1)")
+    parser.add_argument("--extended", action="store_true",
+                        help="also capture from the sides and the far end of the room (10 more poses) and print "
+                             "the extended tour's figures after the tour's")
 
 
 def main(argv: Sequence[str]) -> None:
@@ -171,18 +178,22 @@ def main(argv: Sequence[str]) -> None:
     args = parser.parse_args(list(argv))
     noise, seed = args.noise, args.seed
     rng = np.random.default_rng(seed) if noise else None
-    shots = [(pose, *shoot(pose, f"tour-{k}", rng)) for k, pose in enumerate(TOUR)]
-    good = [s for s in shots if s[0] not in BAD]
+    poses = EXTENDED if args.extended else TOUR
+    shots = [(pose, *shoot(pose, f"tour-{k}", rng)) for k, pose in enumerate(poses)]
     first = evaluate(_fused(Scene(), shots[0][1])[0], shots[0][2])
-    print(f"tour of {len(TOUR)} captures ({len(BAD)} bad), perception: ground truth"
+    print(f"tour of {len(TOUR)} captures ({len(BAD)} bad)" + (f", extended by {len(SIDE_AND_FAR)} from the sides and "
+          "the far end" if args.extended else "") + ", perception: ground truth"
           + (f" + noise (seed {seed})" if noise else "") + f"; one capture alone: median {first['median']:.3f} m")
-    for name, merge in (("former merge", _legacy), ("map fusion  ", _fused)):
-        r, g = run(shots, merge), run(good, merge)
-        print(f"{name}: {r['mapped']} mapped; of {r['in_view']} true objects in view {r['once']} mapped "
-              f"({r['missing']} not: {', '.join(r['missing_ids'])}), {r['duplicates']} duplicates, {r['false']} false; centre error median "
-              f"{r['median']:.3f} m, p95 {r['p95']:.3f} m; {r['held']} captures held back; {r['off_floor']} floor objects off the floor > 0.05 m; "
-              f"without the bad captures median {g['median']:.3f} m (bad ones add {r['median'] - g['median']:+.3f} m)")
-
+    tours = [("tour", shots[:len(TOUR)])] + ([("extended", shots)] if args.extended else [])
+    for tour, part in tours:
+        good = [s for s in part if s[0] not in BAD]
+        for name, merge in (("former merge", _legacy), ("map fusion  ", _fused)):
+            r, g = run(part, merge), run(good, merge)
+            print(f"{tour:8s} {name}: {r['mapped']} mapped; of {r['in_view']} true objects in view {r['once']} mapped "
+                  f"({r['missing']} not: {', '.join(r['missing_ids'])}), {r['duplicates']} duplicates, {r['false']} false, "
+                  f"{r['outside']} outside the workspace; centre error median {r['median']:.3f} m, p95 {r['p95']:.3f} m; "
+                  f"{r['held']} captures held back; {r['off_floor']} floor objects off the floor > 0.05 m; "
+                  f"without the bad captures median {g['median']:.3f} m (bad ones add {r['median'] - g['median']:+.3f} m)")
 
 if __name__ == "__main__":
     main(sys.argv[1:])

@@ -76,6 +76,8 @@ class ConsoleConfig:
         agent_real_vehicle: Allow agent proposals on a real (non-loopback) vehicle link.
         world: The simulator's world (:class:`~console.link.world_file.World` or a world file's path;
             ``None``: the paper's room): its hidden objects, bounds (the workspace), walls and start.
+        perception: The simulator's perception without ``models``: ``exact`` (its ground truth) or
+            ``noisy`` (box jitter, missed and false detections: :mod:`console.link.sim_perception_noise`).
     """
 
     robot: str = "sim"
@@ -97,6 +99,7 @@ class ConsoleConfig:
     mcp_allow_actions: bool = False
     agent_real_vehicle: bool = False
     world: Any = None
+    perception: str = "exact"
 
 
 class ConsoleApp:
@@ -292,7 +295,7 @@ class ConsoleApp:
     def _choose_perceiver(self) -> Perceiver:
         from console.session.mapping_job import choose_perceiver
 
-        return choose_perceiver(self.link, self.config.models)
+        return choose_perceiver(self.link, self.config.models, self.config.perception)
 
     def _make_runner(self) -> MissionRunner | None:
         from console.views.mission_view import make_runner

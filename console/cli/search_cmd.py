@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
+import math
 import sys
 import tempfile
 import time
@@ -18,16 +19,18 @@ from typing import Any
 
 from console.cli.errors import CliError
 from console.session.search import target_height
+from console.session.operator_state import BATTERY_LOW
+from console.session.search_types import BATTERY_RESERVE
 
 
 class HeadlessRig:
     """A simulated robot, a session, capture & map (ground truth), the mission runner and a search,
     wired as the console wires them (the link's states reach the session)."""
 
-    def __init__(self, world: Any, folder: Path, time_scale: float = 8.0) -> None:
+    def __init__(self, world: Any, folder: Path, time_scale: float = 8.0, perception: str = "exact") -> None:
         from console.link.sim import SimRobot
         from console.link.sim_config import SimConfig
-        from console.session.mapping_job import GROUND_TRUTH_LABEL, MapperPerceiver, MappingJob, ground_truth_bundle_for
+        from console.session.mapping_job import MappingJob, simulator_perceiver
         from console.session.search import SearchJob
         from console.session.session import Session
         from console.session.session_types import robot_snapshot
@@ -43,8 +46,7 @@ class HeadlessRig:
         st = self.robot.latest_state()
         if st is not None:
             self.session.set_robot(robot_snapshot(st))
-        self.mapping = MappingJob(self.session, self.robot.capture,
-                                  MapperPerceiver(GROUND_TRUTH_LABEL, ground_truth_bundle_for))
+        self.mapping = MappingJob(self.session, self.robot.capture, simulator_perceiver(perception))
         self.runner = make_runner(self.robot, self.session)
         self.search = SearchJob(self.session, self.robot, self.mapping, self.runner)
         from console.session.vehicle_commands import VehicleCommands
@@ -72,13 +74,18 @@ def cmd_search(args: argparse.Namespace) -> int:
     out = Path(args.out) if args.out else None
     if out is not None and (out.is_dir() or not out.parent.is_dir()):
         raise CliError(f"--out {out}: must be a file name in an existing folder")
+    pct = args.battery_reserve
+    if not (math.isfinite(pct) and 100 * BATTERY_LOW <= pct < 100):
+        raise CliError(f"--battery-reserve: must be within {100 * BATTERY_LOW:.0f}..100 [%] (below "
+                       f"{100 * BATTERY_LOW:.0f} % the console refuses new moves), got {pct:g}")
     try:
         cfg = SearchConfig(args.target, mode="auto", max_captures=args.max_captures, max_time=args.max_time,
-                           target_height=target_height(args.target))
+                           target_height=target_height(args.target), min_battery=args.battery_reserve / 100.0)
     except SessionError as exc:
         raise CliError(str(exc)) from None
     with tempfile.TemporaryDirectory(prefix="morphonavi-search-") as tmp:
-        rig = HeadlessRig(world, Path(tmp) / "session", time_scale=args.time_scale)
+        rig = HeadlessRig(world, Path(tmp) / "session", time_scale=args.time_scale,
+                          perception=getattr(args, "perception", "exact"))
         printed = [0]
 
         def show(topic: str, _payload: Any) -> None:
@@ -92,7 +99,8 @@ def cmd_search(args: argparse.Namespace) -> int:
         rig.session.subscribe(show)
         try:
             print(f"searching the simulator's room '{world.name}' for {args.target!r} "
-                  f"(ground-truth perception, time x{args.time_scale:g})", flush=True)
+                  f"({'noisy ' if getattr(args, 'perception', 'exact') == 'noisy' else ''}ground-truth perception, "
+                  f"time x{args.time_scale:g})", flush=True)
             rig.search.start(cfg)
             while not rig.search.wait(0.5):
                 pass
@@ -129,8 +137,14 @@ def add_search_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[
     p.add_argument("--out", default=None, metavar="FILE", help="write the result as JSON here (e.g. result.json)")
     p.add_argument("--max-captures", type=int, default=20, help="capture budget (default 20)")
     p.add_argument("--max-time", type=float, default=900.0, help="time budget [s] (default 900)")
+    p.add_argument("--battery-reserve", type=float, default=100 * BATTERY_RESERVE, metavar="PCT",
+                   help=f"end the search when the charge falls below this [%%] (default {100 * BATTERY_RESERVE:.0f}; "
+                        "at least 25, where the console refuses new moves)")
     p.add_argument("--time-scale", type=float, default=8.0,
                    help="simulated seconds per wall-clock second (default 8)")
+    p.add_argument("--perception", choices=("exact", "noisy"), default="exact",
+                   help="'exact' (default, the render's ground truth) or 'noisy' (box jitter, 10 %% missed and "
+                        "occasional false detections, as morphonavi console --perception noisy)")
     p.set_defaults(func=cmd_search, command="search")
 
 

@@ -233,7 +233,8 @@ class MappingJob:
             ))
             # the fusion is pure: a dry run against the map says what will happen to each object and
             # whether the capture agrees with the map at all (the session's merge never holds back)
-            _, preview = fuse(self._session.scene, result.scene)
+            ws = self._session.workspace
+            _, preview = fuse(self._session.scene, result.scene, bounds=(ws.min, ws.max))
             if preview.held_back:
                 with self._lock:
                     self._held = (result.scene, cap_id)
@@ -242,7 +243,9 @@ class MappingJob:
                 self._session.notify("Capture held back", f"{text} The map is unchanged: merge it anyway, replace "
                                      "the map with it, or discard it.", "warning")
                 return True
-            report = self._session.spawn(result.scene, origin=f"capture {cap_id}")
+            drop = preview.not_added  # e.g. an object outside the workspace: said in the notes, not added
+            report = self._session.spawn(result.scene.with_objects([o for o in result.scene.objects if o.id not in drop])
+                                         if drop else result.scene, origin=f"capture {cap_id}")
             known = self._observe_known(cap_id, shot, result)  # the known space, one undo step with the capture
             dt = time.perf_counter() - t0
             rejected = preview.rejected
@@ -435,6 +438,18 @@ class OfflineModels:
             progress(1.0, "models ready")
 
 
+NOISY_LABEL = "ground truth with perception noise (simulator render: box jitter, missed and false detections)"
+
+
+def simulator_perceiver(perception: str = "exact") -> MapperPerceiver:
+    """The simulator's ground-truth perception, ``exact`` or ``noisy`` (like a real detector's)."""
+    if perception == "noisy":
+        from console.link.sim_perception_noise import noisy_bundle_for
+
+        return MapperPerceiver(NOISY_LABEL, noisy_bundle_for())
+    return MapperPerceiver(GROUND_TRUTH_LABEL, ground_truth_bundle_for)
+
+
 def missing_offline_models(model_dir: Path | None) -> list[str]:
     """Registry names of the offline set's models not found (in ``model_dir`` or the default places)."""
     from pipeline.models.registry import locate, set_members
@@ -442,18 +457,19 @@ def missing_offline_models(model_dir: Path | None) -> list[str]:
     return [n for n in set_members("offline") if locate(n, model_dir) is None]
 
 
-def choose_perceiver(link: Any, model_dir: Path | None) -> Perceiver:
+def choose_perceiver(link: Any, model_dir: Path | None, perception: str = "exact") -> Perceiver:
     """The perception backend for a link.
 
     With ``model_dir`` the offline models are used (a simulator falls back to its ground truth,
     labelled so, when they are missing). Without it, a simulator maps its renders with ground-truth
-    perception, and a real robot uses the offline models from the default model folders.
+    perception (``perception="noisy"``: through :mod:`console.link.sim_perception_noise`), and a real
+    robot uses the offline models from the default model folders.
     """
     from console.link.sim import SimRobot
 
     simulated = isinstance(link, SimRobot)
     if model_dir is None and simulated:
-        return MapperPerceiver(GROUND_TRUTH_LABEL, ground_truth_bundle_for)
+        return simulator_perceiver(perception)
     missing = missing_offline_models(model_dir)
     where = str(model_dir) if model_dir is not None else "the default model folders"
     if missing and simulated:

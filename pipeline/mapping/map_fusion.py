@@ -9,11 +9,19 @@ frame (z up) [m], yaw about +z [rad], sizes ``(w, h, l)`` [m] (see :mod:`pipelin
    map object it matches. A rejected view is still recorded in that object's history.
 2. **Association.** Candidates share the class (catalog synonyms resolved) and are either within
    the distance gate (squared Mahalanobis distance under ``FusionConfig.gate`` with both estimates'
-   covariances: see :mod:`pipeline.mapping.observation_sigma`) or overlap in footprint and height. One
+   covariances: see :mod:`pipeline.mapping.observation_sigma`), or overlap in footprint and height, or
+   (a partial view, cut or hidden, that matched nothing else) see the one object of its class its
+   viewing ray meets (:func:`~pipeline.mapping.map_extent.along_ray_match`): such a view is recorded in
+   the object's history, its centre (a guess from the class size) not used. One
    global assignment (``scipy.optimize.linear_sum_assignment`` on the Mahalanobis costs): an
    observation updates at most one object, an object takes at most one observation per capture.
+   An unmatched observation becomes a new object with the next free id of its class
+   (:func:`~pipeline.mapping.map_extent.next_id`; existing ids never change), unless it overlaps (in
+   footprint and height, as above) an object of its class another observation of the capture updated
+   (one object seen as two detections) or its centre is outside the workspace ``bounds``: then it is
+   rejected with the reason.
 3. **Fusion.** An object keeps its observations (``SceneObject.history``); its position is their
-   mean weighted by ``1 / sigma^2`` (sigma along each camera ray), its yaw their weighted
+   mean weighted by ``1 / sigma^2`` (the larger of each view's along- and across-ray sigmas), its yaw their weighted
    mean modulo pi (a box is symmetric under a half turn), its size their weighted mean. A far, cut
    or occluded view weighs little; a capture seen again replaces its own earlier observation.
 4. **Pinned objects** (:attr:`~pipeline.scene.SceneObject.is_pinned`: the operator moved, typed or
@@ -35,11 +43,16 @@ import numpy as np
 from scipy.optimize import linear_sum_assignment
 
 from pipeline.mapping import map_consistency
+from pipeline.mapping.map_extent import RAY_SIGMAS, along_ray_match, next_id, outside_workspace
 from pipeline.mapping.map_support import footprint_overlap, supported_z, vertical_overlap
-from pipeline.mapping.observation_sigma import MIN_RANGE, degenerate, distance_to_box, observation_sigma, ray_covariance
+from pipeline.mapping.observation_sigma import (MIN_RANGE, ObservationSigma, degenerate, distance_to_box,
+                                                observation_sigma, ray_covariance)
 from pipeline.scene import Capture, Scene, SceneError, SceneObject, Sighting, Vec3
 
 Action = Literal["added", "updated", "recorded", "rejected"]
+
+EXTENT_NOTE = "seen in part along the viewing ray: its centre, a guess from the class size, not used"
+"""Why a partial view joined by its extent does not move the object (history note, capture notice)."""
 
 
 @dataclass(frozen=True)
@@ -75,7 +88,8 @@ class Outcome:
         observation: Its id in the new capture.
         label: Its class.
         action: ``added`` (a new object), ``updated`` (fused into ``object_id``), ``recorded`` (matched
-            the pinned ``object_id``: kept in its history only) or ``rejected`` (``reason`` says why).
+            the pinned ``object_id``, or joined it by extent only: kept in its history, ``reason``
+            says why) or ``rejected`` (``reason`` says why).
         object_id: The map object it became or matched, if any.
         reason: Why rejected (or recorded only).
         sigma: Its along-ray 1-sigma [m].
@@ -115,11 +129,17 @@ class FusionReport:
     def rejected(self) -> list[Outcome]:
         return [o for o in self.outcomes if o.action == "rejected"]
 
+    @property
+    def not_added(self) -> set[str]:
+        """Observation ids rejected without a map object (outside the workspace, a sliver...): a caller
+        that merges the capture again (the console's spawn) leaves them out."""
+        return {o.observation for o in self.outcomes if o.action == "rejected" and o.object_id is None}
+
     def notes(self) -> list[str]:
         """Operator-facing lines: rejections, pinned objects seen again, corrections, hold-back."""
         out = [f"{o.observation} ({o.label}) not used: {o.reason}" for o in self.rejected]
-        out += [f"{o.object_id} is pinned: seen again at the capture, not moved" for o in self.outcomes
-                if o.action == "recorded"]
+        out += [f"{o.object_id} is pinned: seen again at the capture, not moved" if o.reason != EXTENT_NOTE
+                else f"{o.object_id}: {o.reason}" for o in self.outcomes if o.action == "recorded"]
         out += [f"{oid}: {what}" for oid, what in self.corrections]
         if self.held_back:
             out.insert(0, f"capture held back: {self.held_back}")
@@ -140,8 +160,11 @@ def class_key(label: str, catalog: Any = None) -> str:
 # --- per-object estimates -----------------------------------------------------------------------------
 
 
-def _sighting(obj: SceneObject, capture: Capture | None, used: bool = True, note: str = "") -> Sighting:
-    sig = observation_sigma(obj, capture)
+def _sighting(obj: SceneObject, capture: Capture | None, used: bool = True, note: str = "",
+              others: Sequence[SceneObject] = ()) -> Sighting:
+    sig = observation_sigma(obj, capture, others)
+    if sig.factors and not note:
+        note = "sigma grown: " + ", ".join(sig.factors)
     return Sighting(capture=obj.source.capture, position=obj.position, yaw=obj.yaw, size=obj.size,
                     sigma=(sig.along, sig.across, sig.yaw), camera=sig.camera, distance=sig.distance,
                     used=used, note=note)
@@ -156,12 +179,13 @@ def _cov(s: Sighting) -> np.ndarray:
 def _estimate(sightings: Sequence[Sighting]) -> tuple[np.ndarray, np.ndarray, float, Vec3]:
     """``(position, covariance, yaw, size)`` fused from the used sightings.
 
-    The position is the mean weighted by ``1 / along^2`` (a convex combination: it stays among the
+    The position is the mean weighted by ``1 / max(along, across)^2`` (a view is weighed by its weaker
+    direction: an object cut on both sides is placed across the ray no better than its extent; a convex combination: it stays among the
     views even when their across-ray errors disagree, which the information-weighted mean of narrow
     ray covariances would not); its covariance (for the association gate) ``(sum R_k^-1)^-1``, the
     views' ray covariances combined: narrow across the rays it was seen along.
     """
-    w = np.array([1.0 / s.sigma[0] ** 2 for s in sightings])
+    w = np.array([1.0 / max(s.sigma[0], s.sigma[1]) ** 2 for s in sightings])
     pos = (w[:, None] * np.array([s.position for s in sightings], dtype=np.float64)).sum(0) / w.sum()
     cov = np.linalg.inv(sum(np.linalg.inv(_cov(s)) for s in sightings))
     wy = np.array([1.0 / s.sigma[2] ** 2 for s in sightings])
@@ -195,7 +219,8 @@ def _map_cov(obj: SceneObject, captures: dict[str, Capture]) -> np.ndarray:
 
 def _cost(obs: SceneObject, r_obs: np.ndarray, obj: SceneObject, p_obj: np.ndarray, cfg: FusionConfig,
           captures: dict[str, Capture]) -> float:
-    """Squared Mahalanobis distance of a candidate pair, ``inf`` if not a candidate."""
+    """Squared Mahalanobis distance of a candidate pair, ``inf`` if not a candidate; a footprint overlap
+    costs the gate."""
     points = [(np.asarray(obj.position), p_obj)]
     if obj.is_pinned:  # also where the operator's object was seen before it was pinned
         points += [(np.asarray(s.position), _cov(s)) for s in _history(obj, captures) if s.capture]
@@ -211,11 +236,13 @@ def _cost(obs: SceneObject, r_obs: np.ndarray, obj: SceneObject, p_obj: np.ndarr
 
 
 def _candidates(obs: Sequence[SceneObject], covs: Sequence[np.ndarray], objects: Sequence[SceneObject],
-                p_objs: Sequence[np.ndarray], cfg: FusionConfig, captures: dict[str, Capture]) -> np.ndarray:
+                p_objs: Sequence[np.ndarray], cfg: FusionConfig, captures: dict[str, Capture],
+                sigs: Sequence[ObservationSigma] = ()) -> np.ndarray:
     """``[len(obs), len(objects)]`` mask of the pairs :func:`_cost` may find finite, from bounds alone
     (numpy over all pairs, so the exact cost runs on a few instead of every pair: a second drop of a
     1900-object file took 184 s): the squared Mahalanobis distance is at least ``|d|^2 / (lmax(P) +
-    lmax(R))``, and footprints overlap only when their centres lie within both half-diagonals. A pinned
+    lmax(R))``, footprints overlap only when their centres lie within both half-diagonals, and a partial
+    view's ray meets a box only within both 3D half-diagonals and its sigmas' reach. A pinned
     object is also tried where it was seen before, as :func:`_cost` does."""
     pts, lams, owner = [], [], []
     for j, (m, p) in enumerate(zip(objects, p_objs)):
@@ -243,19 +270,27 @@ def _candidates(obs: Sequence[SceneObject], covs: Sequence[np.ndarray], objects:
     rad_m = np.array([math.hypot(m.size[0], m.size[2]) / 2 for m in objects])
     pc = np.array([m.position for m in objects], dtype=np.float64)
     dh = np.hypot(pc[None, :, 0] - po[:, None, 0], pc[None, :, 1] - po[:, None, 1])
-    return gate | (dh <= rad_o[:, None] + rad_m[None, :] + 1e-9)
+    gate |= dh <= rad_o[:, None] + rad_m[None, :] + 1e-9
+    if sigs:
+        reach = np.array([np.linalg.norm(o.size) / 2 + RAY_SIGMAS * (g.along + g.across) if g.partial else -np.inf
+                          for o, g in zip(obs, sigs)])
+        d3 = np.linalg.norm(pc[None, :, :] - po[:, None, :], axis=2)
+        gate |= d3 <= reach[:, None] + np.array([np.linalg.norm(m.size) / 2 for m in objects])[None, :]
+    return gate
 
 
 def _assign(obs: Sequence[SceneObject], covs: Sequence[np.ndarray], objects: Sequence[SceneObject],
             cfg: FusionConfig, captures: dict[str, Capture], keys: dict[str, str],
-            taken: set[int]) -> dict[int, int]:
-    """Observation index -> object index, one global assignment over the candidate pairs."""
+            taken: set[int], sigs: Sequence[ObservationSigma], by_extent: set[int] | None = None) -> dict[int, int]:
+    """Observation index -> object index, one global assignment over the candidate pairs; the
+    observations matched only by their extent along the viewing ray are added to ``by_extent``."""
     if not obs or not objects:
         return {}
+    ray_pairs: set[tuple[int, int]] = set()
     big = 1e9
     cost = np.full((len(obs), len(objects)), big)
     p_objs = [_map_cov(o, captures) for o in objects]
-    cand = _candidates(obs, covs, objects, p_objs, cfg, captures)
+    cand = _candidates(obs, covs, objects, p_objs, cfg, captures, sigs)
     for i, (o, r) in enumerate(zip(obs, covs)):
         for j in np.flatnonzero(cand[i]).tolist():
             m = objects[j]
@@ -264,8 +299,18 @@ def _assign(obs: Sequence[SceneObject], covs: Sequence[np.ndarray], objects: Seq
             c = _cost(o, r, m, p_objs[j], cfg, captures)
             if math.isfinite(c):
                 cost[i, j] = c
+        g = sigs[i] if sigs else None
+        if g is not None and g.partial and not (cost[i] < big).any():  # a partial view that matched nothing:
+            ext = [j for j in np.flatnonzero(cand[i]).tolist() if j not in taken and keys[o.label] == keys[objects[j].label]
+                   and along_ray_match(o, g.camera, g.across, objects[j])]
+            if len(ext) == 1:  # its ray meets one object of its class (two, e.g. a line of boxes: ambiguous)
+                cost[i, ext[0]] = cfg.gate
+                ray_pairs.add((i, ext[0]))
     rows, cols = linear_sum_assignment(cost)
-    return {int(i): int(j) for i, j in zip(rows, cols) if cost[i, j] < big}
+    out = {int(i): int(j) for i, j in zip(rows, cols) if cost[i, j] < big}
+    if by_extent is not None:
+        by_extent |= {i for i, j in out.items() if (i, j) in ray_pairs}
+    return out
 
 
 # --- the fusion -------------------------------------------------------------------------------------------
@@ -280,7 +325,8 @@ def _refit(obj: SceneObject, history: tuple[Sighting, ...], newest: SceneObject)
 
 
 def fuse(scene: Scene, observations: Scene, *, catalog: Any = None, config: FusionConfig | None = None,
-         check_consistency: bool | None = None) -> tuple[Scene, FusionReport]:
+         check_consistency: bool | None = None,
+         bounds: tuple[Sequence[float], Sequence[float]] | None = None) -> tuple[Scene, FusionReport]:
     """Fold the world-frame objects of ``observations`` (one capture, usually) into ``scene``.
 
     Args:
@@ -289,14 +335,20 @@ def fuse(scene: Scene, observations: Scene, *, catalog: Any = None, config: Fusi
         catalog: Resolves label synonyms (default: the packaged catalog).
         config: Thresholds.
         check_consistency: Override ``config.check_consistency`` (``False``: the operator accepted).
+        bounds: The workspace box ``(min, max)`` (world frame [m]); an observation that would become a
+            new object with its centre outside it is rejected ("... m outside the workspace: not
+            added"). ``None``: not checked.
 
     Returns:
         ``(map, report)``; when ``report.held_back`` the map is ``scene`` unchanged.
 
     Raises:
         SceneError: An observation not in the world frame or with a non-finite value (names it).
+        ValueError: ``bounds`` not two finite 3-vectors with ``min < max`` (names it).
     """
     cfg = config or FusionConfig()
+    if bounds is not None:
+        bounds = _check_bounds(bounds)
     check = cfg.check_consistency if check_consistency is None else check_consistency
     if catalog is None:
         from pipeline.catalog import default_catalog
@@ -318,11 +370,15 @@ def fuse(scene: Scene, observations: Scene, *, catalog: Any = None, config: Fusi
     good = [i for i, w in why.items() if w is None]
     bad = [i for i, w in why.items() if w is not None]
     obs = observations.objects
-    sig = {i: observation_sigma(o, cap(o)) for i, o in enumerate(obs)}
-    covs = {i: sig[i].covariance(o.position) for i, o in enumerate(obs)}
-    first = _assign([obs[i] for i in good], [covs[i] for i in good], objects, cfg, captures, keys, set())
+    sig = {i: observation_sigma(o, cap(o), obs) for i, o in enumerate(obs)}
+    covs = {i: sig[i].gate_covariance(o.position) for i, o in enumerate(obs)}
+    ray: set[int] = set()
+    first = _assign([obs[i] for i in good], [covs[i] for i in good], objects, cfg, captures, keys, set(),
+                    [sig[i] for i in good], ray)
     match = {good[a]: j for a, j in first.items()}
-    second = _assign([obs[i] for i in bad], [covs[i] for i in bad], objects, cfg, captures, keys, set(match.values()))
+    by_extent = {good[a] for a in ray}
+    second = _assign([obs[i] for i in bad], [covs[i] for i in bad], objects, cfg, captures, keys, set(match.values()),
+                     [sig[i] for i in bad])
     match.update({bad[a]: j for a, j in second.items()})
 
     if check and objects:
@@ -349,14 +405,16 @@ def fuse(scene: Scene, observations: Scene, *, catalog: Any = None, config: Fusi
             if near < MIN_RANGE:
                 reason = f"camera too close: {near:.2f} m from {m.id} (under {MIN_RANGE:g} m)"
         if j is None:
+            reason = reason or _taken_overlap(o, objects, set(match.values()), keys, cfg)
+            if reason is None and bounds is not None:
+                out, reach = outside_workspace(o, bounds[0], bounds[1])
+                if out:
+                    reason = f"{reach:.1f} m outside the workspace: not added"
             if reason is not None:
                 outcomes.append(Outcome(o.id, o.label, "rejected", None, reason, sig[i].along))
                 continue
-            new_id, k = o.id, 1
-            while new_id in index:
-                k += 1
-                new_id = f"{o.id}-{k}"
-            objects.append(replace(o, id=new_id, history=(_sighting(o, c),), pinned=False, flags=()))
+            new_id = next_id(o.id, o.label, index)
+            objects.append(replace(o, id=new_id, history=(_sighting(o, c, others=obs),), pinned=False, flags=()))
             index[new_id] = len(objects) - 1
             touched.add(new_id)
             outcomes.append(Outcome(o.id, o.label, "added", new_id, "", sig[i].along))
@@ -364,13 +422,18 @@ def fuse(scene: Scene, observations: Scene, *, catalog: Any = None, config: Fusi
         m = objects[j]
         old = tuple(s for s in _history(m, captures) if o.source.capture is None or s.capture != o.source.capture
                     or not s.used)
+        if reason is None and i in by_extent and not m.is_pinned:
+            note = EXTENT_NOTE
+            objects[j] = replace(m, history=old + (_sighting(o, c, used=False, note=note, others=obs),))
+            outcomes.append(Outcome(o.id, o.label, "recorded", m.id, note, sig[i].along))
+            continue
         if reason is not None or m.is_pinned:
             note = reason or "pinned: recorded, not moved"
-            objects[j] = replace(m, history=old + (_sighting(o, c, used=False, note=note),))
+            objects[j] = replace(m, history=old + (_sighting(o, c, used=False, note=note, others=obs),))
             action: Action = "rejected" if reason is not None else "recorded"
             outcomes.append(Outcome(o.id, o.label, action, m.id, note, sig[i].along))
             continue
-        history = old + (_sighting(o, c),)
+        history = old + (_sighting(o, c, others=obs),)
         objects[j] = _refit(m, history, o)
         touched.add(m.id)
         outcomes.append(Outcome(o.id, o.label, "updated", m.id, "", sig[i].along))
@@ -379,6 +442,29 @@ def fuse(scene: Scene, observations: Scene, *, catalog: Any = None, config: Fusi
     known = {c.id for c in scene.captures}
     new_caps = scene.captures + tuple(c for c in observations.captures if c.id not in known)
     return Scene(objects=tuple(objects), captures=new_caps), FusionReport(tuple(outcomes), tuple(corrections))
+
+
+def _taken_overlap(o: SceneObject, objects: Sequence[SceneObject], taken: set[int], keys: dict[str, str],
+                   cfg: FusionConfig) -> str | None:
+    """Why ``o`` may not become a new object: it overlaps an object of its class that another
+    observation of the same capture updated (``None``: it may)."""
+    for j in sorted(taken):
+        m = objects[j]
+        if keys[m.label] == keys[o.label] and vertical_overlap(o, m) >= cfg.min_vertical \
+                and footprint_overlap(o, m) >= cfg.min_overlap:
+            return f"overlaps {m.id}, which another detection of this capture updated: not added"
+    return None
+
+
+def _check_bounds(bounds: Any) -> tuple[tuple[float, ...], tuple[float, ...]]:
+    try:
+        lo, hi = (tuple(float(v) for v in b) for b in bounds)
+    except (TypeError, ValueError):
+        raise ValueError(f"fuse.bounds: must be (min, max), two 3-vectors [m], got {bounds!r}") from None
+    if len(lo) != 3 or len(hi) != 3 or not all(math.isfinite(v) for v in lo + hi) \
+            or not all(a < b for a, b in zip(lo, hi)):
+        raise ValueError(f"fuse.bounds: must be two finite 3-vectors with min < max [m], got {bounds!r}")
+    return lo, hi
 
 
 def _support(objects: list[SceneObject], touched: set[str]) -> list[tuple[str, str]]:

@@ -13,6 +13,26 @@ The model (until the mapping pipeline reports a per-object sigma, issue 11: an o
   (:data:`CUT_YAW_SIGMA`); a box much shorter than the class height at that distance (occluded) too;
 - yaw ``YAW_SIGMA`` by method.
 
+What a capture can range well grows the along-ray sigma further (factors multiply). Each constant was
+fitted on the simulator tour (``bench/sim_sigma_fit.py``: the 629 observations of the 20 captures of
+``bench/sim_tour.py --extended``, with and without perception noise, matched to the true objects; a
+median regression of ``log(|along-ray error| / sigma)`` on the conditions, the cut factor included in
+``sigma``), not set per case:
+
+- **near** (:data:`NEAR_FACTOR` when the camera is nearer than :data:`NEAR_RANGE` to the object's box):
+  the object fills the view and its far side is unseen; depth sensors are blind there;
+- **hidden** (:data:`HIDDEN_FACTOR` when more than :data:`HIDDEN` of the box lies inside boxes of the
+  same capture's nearer objects of another class): only part of the object is seen, so its centre is
+  guessed from the class size;
+- **beyond the depth model's range** (``distance / DEPTH_RANGE`` beyond :data:`DEPTH_RANGE`, depth from a
+  model only; the simulator's rendered depth has no range limit, so the tour cannot fit this one): the
+  relative error of a depth model grows beyond what its training sensor measured;
+- **cut on two or more sides** (the object is wider than the view): the across-ray sigma is at least
+  the object's largest horizontal size over ``2 sqrt(3)`` (the visible part's centre is anywhere within
+  that extent: a uniform spread), and the fusion weighs a view by its larger sigma;
+- **edge of the view** (the box centre farther than :data:`EDGE` of the half-width from the principal
+  point) was measured too: fitted 0.91 once cut boxes are accounted for, so it has no factor.
+
 :func:`degenerate` names the views that carry no usable position at all (rejected, with the reason
 shown to the operator): a camera too close (the box covers the whole image, a depth reading or the
 object nearer than :data:`MIN_RANGE`) and a sliver at the image border.
@@ -76,6 +96,35 @@ OCCLUDED = 0.5
 """A box shorter than this fraction of the class height's image extent is taken as occluded."""
 
 
+NEAR_RANGE = 0.8
+"""A camera nearer than this to the object's box [m] is a close-up (see :data:`NEAR_FACTOR`): the
+minimum range of the Kinect v1 that recorded NYU Depth v2 (see :data:`DEPTH_RANGE`)."""
+
+NEAR_FACTOR = 1.3
+"""Along-ray sigma multiplier of a close-up (median regression on the tour: 1.27, 9 observations)."""
+
+EDGE = 0.7
+"""A box centre farther than this fraction of the image half-width from the principal point is at
+the edge of the view (measured by ``bench/sim_sigma_fit.py``; no factor)."""
+
+
+HIDDEN = 0.7
+"""A box more than this fraction inside nearer objects' boxes of the same capture is mostly hidden."""
+
+HIDDEN_FACTOR = 1.3
+"""Along-ray sigma multiplier of a mostly hidden view (median regression on the tour: 1.31, 146 observations)."""
+
+HIDDEN_GAP = 0.3
+"""Another object is nearer when its camera distance is smaller by more than this [m]."""
+
+DEPTH_RANGE = 4.5
+"""Farthest distance [m] a monocular depth model ranges well: the practical range of the Kinect v1
+that recorded NYU Depth v2, which the offline depth model (FastDepth) learnt from."""
+
+UNIFORM_STD = 1.0 / (2.0 * math.sqrt(3.0))
+"""Standard deviation of a uniform spread over a unit extent."""
+
+
 @dataclass(frozen=True)
 class ObservationSigma:
     """The 1-sigma errors of one observation.
@@ -87,6 +136,13 @@ class ObservationSigma:
         distance: Camera-to-centre distance [m] used.
         camera: Camera centre [m] (world), ``None`` if unknown (isotropic then).
         cut: Whether the box is cut by the image border (or occluded).
+        partial: Only part of the object is seen (cut, occluded or mostly hidden): its centre comes
+            from the class size, so the fusion may match it by its extent along the viewing ray
+            (:mod:`pipeline.mapping.map_extent`).
+        gate_along: The along-ray sigma before the range factors (see :meth:`gate_covariance`).
+        across_extent: The across-ray floor of a view cut on two or more sides [m] (0 otherwise).
+        factors: What grew the sigmas beyond the method's (``near``, ``... behind nearer objects``,
+            ``beyond the depth model's range``, ``cut on N sides``), for the object's history.
     """
 
     along: float
@@ -95,12 +151,29 @@ class ObservationSigma:
     distance: float
     camera: Vec3 | None
     cut: bool
+    factors: tuple[str, ...] = ()
+    partial: bool = False
+    gate_along: float = math.nan
+    across_extent: float = 0.0
+
+    @property
+    def weight_sigma(self) -> float:
+        """The larger of the two sigmas [m]: what the fusion weighs this view by."""
+        return max(self.along, self.across)
 
     def covariance(self, position: Sequence[float]) -> np.ndarray:
         """3x3 position covariance [m^2] (world): ``along`` on the camera ray, ``across`` off it."""
         if self.camera is None:
             return np.eye(3) * self.along**2
         return ray_covariance(position, self.camera, self.along, self.across)
+
+    def gate_covariance(self, position: Sequence[float]) -> np.ndarray:
+        """The covariance [m^2] the association gate uses: the method's (and cut) sigmas without the
+        range factors, which weigh a view less but must not widen its reach to the next object."""
+        along = self.gate_along if math.isfinite(self.gate_along) else self.along
+        if self.camera is None:
+            return np.eye(3) * along**2
+        return ray_covariance(position, self.camera, along, max(along * LATERAL_RATIO, self.across_extent))
 
 
 def ray_covariance(position: Sequence[float], camera: Sequence[float], along: float, across: float) -> np.ndarray:
@@ -167,21 +240,119 @@ def _given_sigma(obj: SceneObject) -> float | None:
     return max(vals) if vals else None
 
 
-def observation_sigma(obj: SceneObject, capture: Capture | None = None) -> ObservationSigma:
-    """The 1-sigma errors of ``obj`` as seen by ``capture`` (see the module docstring)."""
+def cut_sides(obj: SceneObject, capture: Capture | None) -> int:
+    """How many sides of the object's box the image border cuts (0-4): the mapper's ``cut`` when it
+    names them, else from the box against the image size."""
+    if obj.cut:
+        return len(set(obj.cut))
+    size = _image_size(capture)
+    b = obj.source.bbox
+    if size is None or b is None:
+        return 0
+    w, h = size
+    return int(b[0] <= BORDER_PX) + int(b[1] <= BORDER_PX) + int(b[2] >= w - BORDER_PX) + int(b[3] >= h - BORDER_PX)
+
+
+def edge_offset(obj: SceneObject, capture: Capture | None) -> float:
+    """Horizontal offset of the box centre from the principal point over the image half-width
+    (0 on the optical axis, 1 at the border); 0 when unknown."""
+    size = _image_size(capture)
+    b = obj.source.bbox
+    if size is None or b is None:
+        return 0.0
+    cx = float(capture.intrinsics.get("cx", size[0] / 2)) if capture is not None else size[0] / 2
+    return abs((b[0] + b[2]) / 2 - cx) / (size[0] / 2)
+
+
+def hidden_share(obj: SceneObject, capture: Capture | None, others: Sequence[SceneObject]) -> float:
+    """Share of the object's box [0, 1] inside the boxes of nearer objects of the same capture
+    (nearer by more than :data:`HIDDEN_GAP` along their camera distance); 0 when unknown."""
+    b = obj.source.bbox
+    d = camera_distance(obj, capture)
+    if b is None or d is None or not others:
+        return 0.0
+    x0, y0, x1, y1 = (float(v) for v in b)
+    if x1 <= x0 or y1 <= y0:
+        return 0.0
+    rects = []
+    for o in others:
+        ob = o.source.bbox
+        if o is obj or ob is None or o.source.capture != obj.source.capture or o.label == obj.label:
+            continue
+        od = camera_distance(o, capture)
+        if od is None or od >= d - HIDDEN_GAP:
+            continue
+        rx0, ry0, rx1, ry1 = max(x0, ob[0]), max(y0, ob[1]), min(x1, ob[2]), min(y1, ob[3])
+        if rx1 > rx0 and ry1 > ry0:
+            rects.append((rx0, ry0, rx1, ry1))
+    if not rects:
+        return 0.0
+    xs = sorted({x0, x1, *(r[0] for r in rects), *(r[2] for r in rects)})
+    ys = sorted({y0, y1, *(r[1] for r in rects), *(r[3] for r in rects)})
+    covered = 0.0  # the union's area on the grid of the rectangles' edges
+    for xa, xb in zip(xs, xs[1:]):
+        for ya, yb in zip(ys, ys[1:]):
+            mx, my = (xa + xb) / 2, (ya + yb) / 2
+            if any(r[0] <= mx <= r[2] and r[1] <= my <= r[3] for r in rects):
+                covered += (xb - xa) * (yb - ya)
+    return min(1.0, covered / ((x1 - x0) * (y1 - y0)))
+
+
+def surface_distance(obj: SceneObject, capture: Capture | None) -> float | None:
+    """Distance [m] from the capture's camera to the object's box (0 inside it), ``None`` if unknown."""
+    if capture is None or capture.camera_position is None:
+        return None
+    return distance_to_box(capture.camera_position, obj.position, obj.size, obj.yaw)
+
+
+def _model_depth(capture: Capture | None) -> bool:
+    """Whether the capture's depth came from a depth model (not the simulator's rendered depth)."""
+    name = str(capture.models.get("depth", "")) if capture is not None and capture.models else ""
+    return bool(name) and not name.startswith("ground-truth")
+
+
+def observation_sigma(obj: SceneObject, capture: Capture | None = None,
+                      others: Sequence[SceneObject] = ()) -> ObservationSigma:
+    """The 1-sigma errors of ``obj`` as seen by ``capture`` (see the module docstring).
+
+    ``others``: the other objects of the same capture (for :func:`hidden_share`); empty: not known.
+    """
     d = camera_distance(obj, capture)
     dist = DEFAULT_DISTANCE if d is None or not math.isfinite(d) else d
     a, b = METHOD_SIGMA.get(obj.source.method, DEFAULT_METHOD_SIGMA)
     along = _given_sigma(obj) or (a + b * dist)
     yaw = YAW_SIGMA.get(obj.source.method, DEFAULT_YAW_SIGMA)
-    cut = obj.source.method not in ("manual", "ground_truth") and (
-        is_cut(obj, capture) or is_occluded(obj, capture, d))
+    mapped = obj.source.method not in ("manual", "ground_truth")
+    cut = mapped and (is_cut(obj, capture) or is_occluded(obj, capture, d))
     if cut:
         along *= CUT_FACTOR
         yaw = CUT_YAW_SIGMA
+    factors: list[str] = []
+    gate_along = along
+    sides = cut_sides(obj, capture) if mapped else 0
+    partial = bool(cut)
+    if mapped:
+        near = surface_distance(obj, capture)
+        if near is not None and near < NEAR_RANGE:
+            along *= NEAR_FACTOR
+            factors.append(f"near ({near:.2f} m)")
+        hidden = hidden_share(obj, capture, others)
+        if hidden > HIDDEN:
+            along *= HIDDEN_FACTOR
+            partial = True
+            factors.append(f"{100 * hidden:.0f} % behind nearer objects")
+        if d is not None and d > DEPTH_RANGE and _model_depth(capture):
+            along *= d / DEPTH_RANGE
+            factors.append(f"beyond the depth model's range ({d:.1f} m)")
     camera = capture.camera_position if capture is not None else None
-    return ObservationSigma(along, along * LATERAL_RATIO if camera is not None else along, yaw, dist,
-                            None if camera is None else tuple(float(v) for v in camera), cut)  # type: ignore[arg-type]
+    across = along * LATERAL_RATIO if camera is not None else along
+    extent = max(obj.size[0], obj.size[2]) * UNIFORM_STD if sides >= 2 else 0.0
+    if sides >= 2:
+        across = max(across, extent)
+        factors.append(f"cut on {sides} sides")
+    return ObservationSigma(along, across, yaw, dist,
+                            None if camera is None else tuple(float(v) for v in camera), cut,  # type: ignore[arg-type]
+                            tuple(factors), partial, gate_along, extent)
 
 
 def distance_to_box(point: Sequence[float], centre: Sequence[float], size: Sequence[float], yaw: float) -> float:
