@@ -311,22 +311,28 @@ class ConsoleApp:
         gui = server.gui
         server.gui.configure_theme(show_share_button=False, brand_color=BRAND_RGB, control_width="large",
                                    show_logo=False)
-        ws = session.workspace
-        cx, cy = (ws.min[0] + ws.max[0]) / 2, (ws.min[1] + ws.max[1]) / 2
-        server.initial_camera.position = (cx - 2.1, ws.min[1] - 2.4, 4.3)
-        server.initial_camera.look_at = (cx + 0.1, cy - 1.1, 0.0)
-        server.initial_camera.up = (0.0, 0.0, 1.0)
+        from console.views.screen_layout import PIN_MARK, install_phone_view, install_pin_script, layout_style
+        from console.views.view_fit import default_view
+
+        ws = session.workspace  # the default view fits the whole flight volume between the panels at 1280 x 720
+        position, look_at, up = default_view(ws, float(server.initial_camera.fov))
+        server.initial_camera.position, server.initial_camera.look_at, server.initial_camera.up = position, look_at, up
+        install_phone_view(server, ws, lambda: None if session.robot is None else tuple(session.robot.pose.translation))
 
         paths_holder: dict[str, PathsView] = {}
         gui.add_html(page_style(RIGHT_PANEL_PX))  # notifications bottom right; the "disconnected" banner
+        gui.add_html(layout_style())  # the robot and mission block pinned; tables unwrapped; the phone's sheet
+        install_pin_script(server)  # a control scrolled into view lands below the pinned block
         install_tab_rules(server)  # a tab in the background reconnects too; notices forgotten with their tab
         install_page_a11y(server)  # every field linked to its label; buttons show their hover text (console.views.page_a11y)
         from console.session.vehicle_commands import VehicleCommands
 
         self.commands = VehicleCommands(session, self.link, self.runner)  # also the agent's Hold / Land here / Return
-        self.views["robot"] = RobotView(server, session, self.config.robot, commands=self.commands)
-        # the mission and its run controls right under the robot status: both stay in sight at 1440 x 900
-        with gui.add_folder("Mission"):
+        # the robot status, its buttons, the mission and its run controls: pinned at the top of the panel,
+        # in sight at 1280 x 720 and up while the rest scrolls (console.views.screen_layout)
+        with gui.add_folder("Robot and mission"):
+            gui.add_html(PIN_MARK)
+            self.views["robot"] = RobotView(server, session, self.config.robot, commands=self.commands)
             self.views["mission"] = MissionView(server, session, self.runner)
         with gui.add_folder("Map"):
             cap = gui.add_button("Capture & map", icon=viser.Icon.CAMERA, color="blue",
