@@ -97,10 +97,11 @@ def run_world(name: str, path: str | None, goal_xy: tuple[float, float], max_loo
             s.register()
             mission = s.build_mission()
             rec["final"] = "-".join(dict.fromkeys(mission.kinds()))
-            before = s.run
+            states: list[str] = []  # this mission's states (the last look's move ended "done" too)
+            s.subscribe(lambda t, p: states.append(p.state) if t == "run" else None)
             rig.runner.execute(mission)
             end = time.monotonic() + 900
-            while time.monotonic() < end and not (s.run is not before and s.run.state in ("done", "aborted", "failed")):
+            while time.monotonic() < end and not ("running" in states and states[-1] in ("done", "aborted", "failed")):
                 time.sleep(0.05)
             pos = rig.robot.latest_state().position
             rec["end"] = tuple(round(float(v), 2) for v in pos)

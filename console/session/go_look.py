@@ -31,7 +31,7 @@ from planner.mission import turn_segment
 from planner.route import Route
 
 from console.session.mapping_job import MappingJob
-from console.session.session import JobStatus, Session, SessionError
+from console.session.session import RUN, JobStatus, Session, SessionError
 
 log = logging.getLogger(__name__)
 
@@ -225,24 +225,23 @@ class GoLookJob:
         kinds = "-".join(dict.fromkeys(mission.kinds()))
         self.outcome.kinds.append(kinds)
         self._report(0.2, f"going to {_fmt(where)}: {kinds} (the Mission panel's Pause / Abort act on it)")
-        before = s.run
-        self._runner.execute(mission)
-        deadline = time.monotonic() + MOVE_TIMEOUT
-        started = False
-        while time.monotonic() < deadline:
-            state = s.run.state
-            started = started or s.run is not before  # the old mission's "done" is not this one's
-            if self._stop.is_set():
-                return "stopped by the operator"
-            if started and state in ("done", "aborted", "failed"):
-                break
-            if started and state == "idle" and not s.run.active:
-                break
-            time.sleep(0.05)
-        else:
-            return f"the move did not end within {MOVE_TIMEOUT:.0f} s"
-        if s.run.state != "done":
-            return f"the move ended {s.run.state}: {s.run.message}"
+        states: list[str] = []  # this mission's run states (the last move's "done" is not this one's)
+        unsubscribe = s.subscribe(lambda topic, st: states.append(st.state) if topic == RUN else None)
+        try:
+            self._runner.execute(mission)
+            deadline = time.monotonic() + MOVE_TIMEOUT
+            while time.monotonic() < deadline:
+                if self._stop.is_set():
+                    return "stopped by the operator"
+                if states and states[-1] in ("done", "aborted", "failed"):
+                    break
+                time.sleep(0.05)
+            else:
+                return f"the move did not end within {MOVE_TIMEOUT:.0f} s"
+        finally:
+            unsubscribe()
+        if states[-1] != "done":
+            return f"the move ended {states[-1]}: {s.run.message}"
         self._clear_route()
         return None
 

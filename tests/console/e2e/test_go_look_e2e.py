@@ -26,7 +26,7 @@ import pytest
 
 from console.app import ConsoleApp, ConsoleConfig
 from console.session.go_look import GO_LOOK, looked_from
-from console.session.session import NOTICE
+from console.session.session import NOTICE, RUN
 from tests.console.e2e.test_console_e2e import needs_browser
 from tests.console.e2e.test_look_known_space_e2e import LONG, _capture, _click_floor, _page, _wait
 
@@ -94,7 +94,8 @@ def test_go_look_opens_a_goal_behind_the_line_and_execute_lands_there(console: C
         kinds: list[str] = []
         for n in range(MAX_LOOKS):
             page.get_by_role("button", name="Go look").click(timeout=LONG)
-            _wait(lambda: s.job.name == GO_LOOK and not s.job.running and not app.go_look.running,
+            # this click's look, not the last one's end: each look taken counts, an error ends it
+            _wait(lambda: not app.go_look.running and (app.go_look.outcome.looks > n or s.job.error is not None),
                   f"Go look {n + 1} to end", 900)
             out = app.go_look.outcome
             assert s.job.error is None, s.job.error
@@ -125,8 +126,11 @@ def test_go_look_opens_a_goal_behind_the_line_and_execute_lands_there(console: C
         journey = "-".join(kinds).split("-")
         assert journey[:3] == ["walk", "takeoff", "fly"] and journey.count("land") == 1, journey
         expect(page.get_by_role("button", name="Execute")).to_be_enabled(timeout=LONG)
+        states: list[str] = []  # the last look's move ended "done" too: this mission's states only
+        s.subscribe(lambda t, p: states.append(p.state) if t == RUN else None)
         page.get_by_role("button", name="Execute").click(timeout=LONG)
-        _wait(lambda: s.run.state in ("done", "paused", "aborted", "failed"), "the mission to end", 600)
+        _wait(lambda: "running" in states and states[-1] in ("done", "paused", "aborted", "failed"),
+              "the mission to end", 600)
         assert s.run.state == "done", (s.run, notices[-5:])
         assert not any("contact with an unmapped obstacle" in m or "refused" in m for m in notices), notices
         here = app.link.latest_state().position
