@@ -232,6 +232,7 @@ class GoLookJob:
             deadline = time.monotonic() + MOVE_TIMEOUT
             while time.monotonic() < deadline:
                 if self._stop.is_set():
+                    self._abort_move(states)
                     return "stopped by the operator"
                 if states and states[-1] in ("done", "aborted", "failed"):
                     break
@@ -244,6 +245,21 @@ class GoLookJob:
             return f"the move ended {states[-1]}: {s.run.message}"
         self._clear_route()
         return None
+
+    def _abort_move(self, states: list[str], timeout: float = 60.0) -> None:
+        """Abort the move under way (again every 2 s: an abort may reach the runner before the move
+        starts) until this mission's state says it ended, at most ``timeout`` [s]."""
+        end = time.monotonic() + timeout
+        while time.monotonic() < end:
+            if states and states[-1] in ("done", "aborted", "failed"):
+                return
+            try:
+                self._runner.abort()
+            except Exception as exc:  # nothing to abort yet, or the runner's errors: try again
+                log.info("go look: abort: %s", exc)
+            again = time.monotonic() + 2.0
+            while time.monotonic() < again and not (states and states[-1] in ("done", "aborted", "failed")):
+                time.sleep(0.05)
 
     def _turn(self, yaw: float) -> str | None:
         while True:
