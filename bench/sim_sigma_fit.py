@@ -94,13 +94,13 @@ def main(argv: Sequence[str]) -> None:
     x = np.array([[1.0, *map(float, c)] for c, _, _, _ in rows])
     y = np.log(np.array([(e + 0.01) / s for _, e, s, _ in rows]))
     beta = median_regression(x, y)
-    used = {"near": osig.NEAR_FACTOR, "edge of the view": 1.0, "hidden": osig.HIDDEN_FACTOR,
-            "beyond depth range": math.nan}
+    used = {"near": f"{osig.NEAR_FACTOR:.2f}", "edge of the view": "none", "hidden": f"{osig.HIDDEN_FACTOR:.2f}",
+            "beyond depth range": f"distance / {osig.DEPTH_RANGE:g} m"}
     print(f"{len(rows)} observations of 40 captures (20 poses, ground truth and noise seed {args.seed})")
     for name, b, col in zip(CONDITIONS, beta[1:], x[:, 1:].T):
         print(f"  {name:20s} {int(col.sum()):4d} observations: fitted factor {math.exp(b):.2f} "
-              f"(in use {used[name]:.2f})" + ("; the rendered depth has no range limit: the factor applies to a "
-                                              "depth model's readings only" if name == "beyond depth range" else ""))
+              f"(in use: {used[name]})" + ("; the rendered depth has no range limit: the factor applies to a "
+                                               "depth model's readings only" if name == "beyond depth range" else ""))
     err = np.array([e for _, e, _, _ in rows])
     for name, sig in (("method sigma", np.array([s for _, _, s, _ in rows])),
                       ("with the factors", np.array([f for _, _, _, f in rows]))):

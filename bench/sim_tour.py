@@ -2,18 +2,23 @@
 
 Run from the repository root::
 
-    python bench/sim_mapping.py --tour [--noise] [--seed N]
+    python bench/sim_mapping.py --tour [--noise] [--seed N] [--extended]
 
 The simulated robot captures the paper's room from :data:`TOUR` (world frame, z up [m]): good views
-and :data:`BAD` ones (a camera 0.07 m from a desk, views with objects cut by the image border).
-Perception is the renderer's ground truth through the real :class:`~pipeline.mapper.Mapper`;
-``--noise`` adds realistic perception noise: box jitter (``N(0, 2 px)`` per side), missed
-detections (10 %) and a false detection in 40 % of the captures. The captures are folded into one
-map by :func:`pipeline.mapping.map_fusion.fuse` and, in the same run, by the console's former merge
+and :data:`BAD` ones (a camera 0.07 m from a desk, views with objects cut by the image border);
+``--extended`` goes on from :data:`SIDE_AND_FAR` (the sides and the far end of the room, among them a
+desk partly hidden at the edge of the view and a close-up cut on three sides) and prints the tour's
+figures and then the extended tour's. Perception is the renderer's ground truth through the real
+:class:`~pipeline.mapper.Mapper`; ``--noise`` adds perception noise
+(:class:`console.link.sim_perception_noise.PerceptionNoise`, as ``morphonavi console --perception
+noisy``): box jitter (``N(0, 2 px)`` per side), missed detections (10 %) and a false detection in 40 %
+of the captures. The captures are folded into one map by :func:`pipeline.mapping.map_fusion.fuse`
+(with the workspace's bounds) and, in the same run, by the console's former merge
 (``legacy_merge.py``). Printed per merge: mapped objects; true objects in view at least once that
-are mapped (exactly once / twice or more / not at all); false objects; the 3D centre error median
-and 95th percentile [m] (each mapped object against its assigned true object); floor-standing
-objects floating or buried by more than 0.05 m; and the median with the bad captures left out.
+are mapped (exactly once / twice or more / not at all); false objects; mapped objects whose centre is
+outside the workspace; the 3D centre error median and 95th percentile [m] (each mapped object against
+its assigned true object); floor-standing objects floating or buried by more than 0.05 m; and the
+median with the bad captures left out.
 """
 
 from __future__ import annotations
