@@ -17,10 +17,12 @@ candidate faces the goal (the robot turns in place: a ``TURN`` segment).
 cell is in view when its bearing from the camera is within half the horizontal field of view of
 the heading, its elevation within half the vertical field of view (so from a camera ``h`` above a
 point the floor shows only beyond ``h / tan(half_vfov)``), and its distance within
-:data:`MIN_RANGE` .. :data:`VIEW_RANGE`; and when the straight line to it crosses no occupied cell,
+:data:`planner.view_rays.MIN_RANGE` .. ``VIEW_RANGE``; and when the straight line to it crosses no occupied cell,
 mapped object or unlabelled obstacle (sampled every half cell; unknown cells do not block: that is
-what the look is for). This is the search's ray casting aimed at the cells that matter (one ray per
-cell instead of a fan: the needed cells are few and small).
+what the look is for). These are the rules of the search's ray casting
+(:func:`planner.search_viewpoints.view_gain`, whose path costs and blocking cells are reused here), aimed
+at the cells that matter: one ray per cell (:mod:`planner.view_rays`) instead of its fan of five
+elevation rays, too sparse for the few small cells a goal needs.
 
 **Score.** ``(NEED_WEIGHT x needed cells seen + neighbourhood seen) / (path cost + COST0)``, the
 neighbourhood cells weighted by ``1 / (1 + distance from the goal)``; a candidate that sees needed
@@ -37,24 +39,16 @@ from typing import Iterable, Sequence
 
 import numpy as np
 
-from numba import njit
 from scipy import ndimage
 
 from planner.astar import AStarSearcher
 from planner.cspace import cube_ball, dilate
 from planner.grid import Closed, CostWeights, GridError, PlanningGrid, build_grid
 from planner.search_viewpoints import UNKNOWN, blocking_cells, path_costs
+from planner.view_rays import VIEW_RANGE, in_view, line_of_sight, wrap as _wrap
 
 Vec3 = tuple[float, float, float]
 
-MIN_RANGE = 0.5
-"""Nearest a seen cell may be to the camera [m] (the mapper drops objects closer)."""
-VIEW_RANGE = 6.0
-"""Farthest a cell is counted as seen [m] (the known space's rays reach 8 m; margin for sparse rays)."""
-HFOV = math.radians(62.0)
-"""The camera's horizontal field of view [rad] (the simulated 640 x 480 camera, fx = 525 px)."""
-FOV_MARGIN = 0.92
-"""Share of each half field of view counted (the image's border pixels are sampled sparsely)."""
 NEIGHBOURHOOD = 2.5
 """Radius in plan [m] of the goal's neighbourhood."""
 NEIGHBOURHOOD_TOP = 2.5
@@ -111,10 +105,6 @@ class Look:
     gain: float
     cost: float
     why: str
-
-
-def _wrap(a: np.ndarray | float) -> np.ndarray:
-    return (np.asarray(a) + np.pi) % (2 * np.pi) - np.pi
 
 
 def known_state(grid: PlanningGrid) -> np.ndarray:
@@ -275,69 +265,6 @@ def cells_to_open(grid: PlanningGrid, cost: np.ndarray, start_cell: Sequence[int
     w = 1.0 / (1.0 + np.minimum(dist_order[tuple(cells.T)], 1e3)) if len(cells) else np.zeros(0)
     stretch = cells[w >= 1.0 / (1.0 + 1.5)] if len(cells) else empty
     return cells, w, stretch
-
-
-def in_view(eyes: np.ndarray, yaws: np.ndarray, pts: np.ndarray, half_vfov: float) -> np.ndarray:
-    """``bool [N, M]``: whether points ``pts [M, 3]`` lie in the field of view of level cameras at
-    ``eyes [N, 3]`` facing ``yaws [N]`` (range, bearing and elevation; no occlusion)."""
-    d = pts[None, :, :] - eyes[:, None, :]
-    flat = np.hypot(d[..., 0], d[..., 1])
-    dist = np.hypot(flat, d[..., 2])
-    bearing = np.abs(_wrap(np.arctan2(d[..., 1], d[..., 0]) - yaws[:, None]))
-    elev = np.abs(np.arctan2(d[..., 2], flat))
-    return ((dist >= MIN_RANGE) & (dist <= VIEW_RANGE) & (bearing <= FOV_MARGIN * HFOV / 2)
-            & (elev <= FOV_MARGIN * half_vfov))
-
-
-@njit(cache=True)
-def _los_kernel(eyes: np.ndarray, pts: np.ndarray, pe: np.ndarray, pp: np.ndarray, own: np.ndarray,
-                block: np.ndarray, lo: np.ndarray, res: float, nx: int, ny: int, nz: int) -> np.ndarray:
-    """For each pair ``(pe[q], pp[q])``: no ``block`` cell (flat, C order) on the segment from the eye to
-    the point, sampled every half cell, the point's own cell ``own[pp[q]]`` excepted."""
-    out = np.ones(len(pe), dtype=np.bool_)
-    step = res / 2.0
-    for q in range(len(pe)):
-        e = eyes[pe[q]]
-        p = pts[pp[q]]
-        dx, dy, dz = p[0] - e[0], p[1] - e[1], p[2] - e[2]
-        n = int(math.ceil(math.sqrt(dx * dx + dy * dy + dz * dz) / step))
-        target = own[pp[q]]
-        for m in range(n):  # the target's own sample (m = n) left out
-            f = m / n
-            i = int(math.floor((e[0] + f * dx - lo[0]) / res))
-            j = int(math.floor((e[1] + f * dy - lo[1]) / res))
-            k = int(math.floor((e[2] + f * dz - lo[2]) / res))
-            if i < 0 or j < 0 or k < 0 or i >= nx or j >= ny or k >= nz:
-                continue
-            c = (i * ny + j) * nz + k
-            if c != target and block[c]:
-                out[q] = False
-                break
-    return out
-
-
-def line_of_sight(grid: PlanningGrid, blocking: np.ndarray, eyes: np.ndarray, cells: np.ndarray,
-                  pairs: np.ndarray | None = None) -> np.ndarray:
-    """``bool [N, M]``: whether the straight line from each eye ``[N, 3]`` (world [m]) to the centre
-    of each cell ``[M, 3]`` crosses no ``blocking`` cell (the target's own cell excepted; sampled every
-    half cell). Only the ``pairs`` (``bool [N, M]``) are cast (default all); the others are ``False``."""
-    ws = grid.workspace
-    n, m = len(eyes), len(cells)
-    out = np.zeros((n, m), dtype=bool)
-    if n == 0 or m == 0:
-        return out
-    nx, ny, nz = ws.shape
-    todo = np.ones((n, m), dtype=bool) if pairs is None else np.asarray(pairs, dtype=bool)
-    pe, pp = np.nonzero(todo)
-    if len(pe) == 0:
-        return out
-    cells = np.asarray(cells, dtype=np.int64)
-    own = (cells[:, 0] * ny + cells[:, 1]) * nz + cells[:, 2]
-    ok = _los_kernel(np.ascontiguousarray(eyes, dtype=np.float64), ws.centers(cells), pe.astype(np.int64),
-                     pp.astype(np.int64), own, np.ascontiguousarray(blocking, dtype=np.bool_).ravel(),
-                     np.asarray(ws.min, dtype=np.float64), float(ws.resolution), nx, ny, nz)
-    out[pe, pp] = ok
-    return out
 
 
 def _repeats(eyes: np.ndarray, yaws: np.ndarray, avoid: Sequence[tuple[Sequence[float], float]]) -> np.ndarray:
