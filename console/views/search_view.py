@@ -21,6 +21,13 @@ from console.session.session import JOB, RUN, SEARCH, Session, SessionError
 from console.views.client_notice import tell
 
 
+def _put(handle: Any, name: str, value: Any) -> None:
+    """Set a GUI property only when it changes (viser sends every assignment: a button re-sent on every
+    step would be re-drawn under the operator's pointer)."""
+    if getattr(handle, name) != value:
+        setattr(handle, name, value)
+
+
 class SearchView:
     """Find controls in the current GUI container.
 
@@ -93,11 +100,11 @@ class SearchView:
         """Buttons, the step line and the viewpoint marker as the search's state allows."""
         job = self._job
         running, paused = job.running, job.paused
-        self.start.disabled = running or self._session.run.active
-        self.approve.visible = running and job.waiting_approval
-        self.pause.visible = running and not paused
-        self.resume.visible = running and paused
-        self.stop.visible = running
+        _put(self.start, "disabled", running or self._session.run.active)
+        _put(self.approve, "visible", running and job.waiting_approval)
+        _put(self.pause, "visible", running and not paused)
+        _put(self.resume, "visible", running and paused)
+        _put(self.stop, "visible", running)
         steps = job.steps
         r = job.result
         if r is not None and not running and r.reason:
@@ -109,7 +116,7 @@ class SearchView:
                    "Resume plans again from where it is"
         else:
             text = html.escape(steps[-1]) if steps else ""
-        self.line.content = f"<small>{text}</small>"
+        _put(self.line, "content", f"<small>{text}</small>")
         vp = job.chosen if running else None
         if vp is not self._drawn:
             self._drawn = vp

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import math
 import tempfile
+import time
 from pathlib import Path
 from typing import Any, Callable
 
@@ -45,10 +46,21 @@ def console(tmp_path: Path):
         app.stop()
 
 
-def _button(page: Any, name: str) -> Any:
-    b = page.get_by_role("button", name=name, exact=True).first
-    b.scroll_into_view_if_needed(timeout=LONG)
-    return b
+def _click(page: Any, name: str, done: Callable[[], bool], what: str, timeout: float = 300.0) -> None:
+    """Click the button ``name`` until ``done`` (the console's state) holds: a panel re-drawn while the
+    pointer moves (a step of the search) detaches the button, so it is found again and clicked again."""
+    from playwright.sync_api import Error
+
+    deadline = time.monotonic() + timeout
+    while not done():
+        assert time.monotonic() < deadline, f"timed out clicking {name!r} for {what}"
+        try:
+            b = page.get_by_role("button", name=name, exact=True).first
+            b.scroll_into_view_if_needed(timeout=LONG)
+            b.click(timeout=LONG)
+        except Error:  # detached or covered while re-drawn: find it again
+            pass
+        wait_until(done, 10.0, 0.05)
 
 
 def test_pause_land_here_and_resume_mid_search_still_finds_the_robot_dog(console: ConsoleApp, tmp_path: Path) -> None:
@@ -80,23 +92,21 @@ def test_pause_land_here_and_resume_mid_search_still_finds_the_robot_dog(console
         budget.fill("30")
         budget.press("Tab")
         _wait(lambda: int(app.views["search"].captures.value) == 30, "the capture budget to reach the console", 60)
-        _button(page, "Start search").click(timeout=LONG)
-        _wait(lambda: app.search.running, "the search to start", 60)
+        _click(page, "Start search", lambda: app.search.running, "the search to start")
 
         # --- pause once the robot has flown over the line of boxes -----------------------------------------
         _wait(lambda: (lambda p: p[1] > 4.2 and p[2] > 0.5)(here()) or not app.search.running,
               "a flight over the line of boxes", 1200)
         assert app.search.running, (app.search.result.reason, app.search.result.battery, app.search.steps[-4:])
-        _button(page, "Pause search").click(timeout=LONG)
+        _click(page, "Pause search", lambda: app.search.paused, "the search to pause")
         _wait(lambda: app.search.paused and not s.run.active, "the move to end where the robot is")
         held = here()
         assert held[2] > 0.5, held  # holding in the air
         _wait(lambda: events and events[-1].get("kind") == "paused", "the search to say it is paused", 120)
 
         # --- Land here: on the nearest floor seen free ------------------------------------------------------
-        land = _button(page, "Land here")
-        expect(land).to_be_enabled(timeout=LONG)
-        land.click(timeout=LONG)
+        expect(page.get_by_role("button", name="Land here", exact=True).first).to_be_enabled(timeout=LONG)
+        _click(page, "Land here", lambda: s.run.active or here()[2] < 0.05, "the landing to start")
         _wait(lambda: s.run.state == "done" and here()[2] < 0.05, "the landing", 600)
         landed = here()
         from console.session.operator_state import unseen_floor
@@ -104,10 +114,7 @@ def test_pause_land_here_and_resume_mid_search_still_finds_the_robot_dog(console
         assert not unseen_floor(landed, s.grid), landed  # on floor a capture saw free
 
         # --- Resume: from where it landed, on to the dog -------------------------------------------------
-        resume = _button(page, "Resume search")
-        expect(resume).to_be_visible(timeout=LONG)
-        resume.click(timeout=LONG)
-        _wait(lambda: not app.search.paused, "the search to resume", 120)
+        _click(page, "Resume search", lambda: not app.search.paused, "the search to resume")
         _wait(lambda: not app.search.running, "the search to end", 1800)
         r = app.search.result
         assert r is not None and r.found and r.target_id == "robot_dog-1", (r.reason, r.battery, app.search.steps[-6:])
