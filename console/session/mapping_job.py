@@ -140,6 +140,10 @@ class MappingJob:
             for obj in self._session.scene.objects:
                 if not obj.is_pinned:
                     self._session.delete_object(obj.id)
+        ws = self._session.workspace  # as a capture that was not held back: nothing new outside the workspace
+        _, preview = fuse(self._session.scene, scene, bounds=(ws.min, ws.max), check_consistency=False)
+        if preview.not_added:
+            scene = scene.with_objects([o for o in scene.objects if o.id not in preview.not_added])
         report = self._session.spawn(scene, origin=f"capture {cap_id}")
         return f"capture {cap_id}: {len(report.added)} new, {len(report.updated)} updated ({action})"
 

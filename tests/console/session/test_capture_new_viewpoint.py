@@ -48,3 +48,16 @@ def test_the_side_view_joins_the_desk_mapped_from_the_start(tmp_path: Path) -> N
     assert after.keys() == desks.keys()  # no "desk-1-2", nothing renamed
     assert all(math.dist(after[k], desks[k]) < 0.15 for k in desks)
     assert all(session.workspace.contains(o.position) for o in session.scene.objects)
+
+
+def test_merging_a_held_back_capture_adds_nothing_outside_the_workspace(tmp_path: Path) -> None:
+    from pipeline.scene import Capture, Scene, SceneObject, Source
+
+    session = Session(tmp_path / "s", autosave=False)
+    job = MappingJob(session, lambda: None, MapperPerceiver(GROUND_TRUTH_LABEL, ground_truth_bundle_for))
+    desk = SceneObject("desk-1", "desk", (-0.6, 3.0, 0.375), (1.4, 0.75, 0.7), 0.0, source=Source("c9", "depth"))
+    chair = SceneObject("office_chair-1", "office_chair", (1.5, 2.3, 0.5), (0.62, 1.05, 0.62), 0.0,
+                        source=Source("c9", "depth"))
+    job._held = (Scene(objects=(desk, chair), captures=(Capture("c9"),)), "c9")  # as run() holds one back
+    assert job.resolve_held("merge") == "capture c9: 1 new, 0 updated (merge)"
+    assert [o.label for o in session.scene.objects] == ["office_chair"]
