@@ -29,6 +29,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import logging
 import math
 import multiprocessing
 import os
@@ -151,6 +152,7 @@ def choice_time(repeat: int) -> tuple[float, float, str]:
     from planner.search_viewpoints import score_viewpoints
     from planner.viewpoint import frontier_spot
 
+    logging.getLogger("console").setLevel(logging.ERROR)  # the session's notices are not the benchmark's output
     rig = HeadlessRig(paper_world(), Path(tempfile.mkdtemp(prefix="bench-search-")) / "s")
     try:
         if not rig.mapping.run():
@@ -184,7 +186,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--budget", type=int, default=12, help="capture budget per search (default 12)")
     ap.add_argument("--jobs", type=int, default=2, help="worker processes (default 2)")
     ap.add_argument("--image-scale", type=float, default=0.5,
-                    help="rendered image size against the simulated 640 x 480 camera (default 0.5)")
+                    help="rendered image size against the simulated 640 x 480 camera, same field of view (default "
+                         "0.5: 320 x 240; objects must cover the same share of the image)")
     ap.add_argument("--runs", default="noise,miss10", help="perception runs, comma-separated (default noise,miss10)")
     ap.add_argument("--strategies", default="search,frontier,random,manual",
                     help="strategies, comma-separated (default search,frontier,random,manual)")
@@ -221,13 +224,18 @@ def main(argv: list[str] | None = None) -> int:
     tasks = [(args.seed, n, runs, strategies, args.budget, args.image_scale) for n in rooms]
     t0 = time.perf_counter()
     records: list[dict] = []
+    def done(part: list[dict]) -> None:
+        records.extend(part)
+        print(f"{part[0]['room']} searched ({len(records) // len(part)} of {len(tasks)} rooms, "
+              f"{time.perf_counter() - t0:.0f} s)", file=sys.stderr, flush=True)
+
     if args.jobs == 1:
         for t in tasks:
-            records += run_room(t)
+            done(run_room(t))
     else:
         with multiprocessing.get_context("fork").Pool(args.jobs) as pool:
             for part in pool.imap_unordered(run_room, tasks):
-                records += part
+                done(part)
     total = time.perf_counter() - t0
     print(f"{len(rooms)} rooms ({'the paper' + chr(39) + 's + ' if not args.no_paper else ''}{args.rooms} random, "
           f"seed {args.seed}); budget {args.budget} captures; images {args.image_scale:g} x 640 x 480; "

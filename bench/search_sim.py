@@ -133,6 +133,7 @@ class SimSearch:
         self.cfg = SimConfig()
         self.out = Outcome(room.name, "", "")
         self.steps: list[str] = []
+        self._grids: dict[tuple[str, int], PlanningGrid] = {}
 
     # --- the map ------------------------------------------------------------------------------------
     @staticmethod
@@ -153,8 +154,15 @@ class SimSearch:
         return out
 
     def grid(self, policy: str = "closed") -> PlanningGrid:
-        """The planning grid of the map so far, as the console builds it (``closed`` or ``allow`` unknown space)."""
-        return grid_for(Scene(objects=tuple(self.objects())), self.ws, MORPHOGEAR.radius, self.known, policy)
+        """The planning grid of the map so far, as the console builds it (``closed`` or ``allow`` unknown
+        space); built once per capture and rule."""
+        key = (policy, self.out.captures)
+        if key not in self._grids:
+            if self._grids and next(iter(self._grids))[1] != self.out.captures:
+                self._grids.clear()
+            self._grids[key] = grid_for(Scene(objects=tuple(self.objects())), self.ws, MORPHOGEAR.radius, self.known,
+                                        policy)
+        return self._grids[key]
 
     def here(self) -> tuple[float, float, float]:
         return (self.pos[0], self.pos[1], max(self.pos[2], self.ws.floor))
