@@ -58,14 +58,14 @@ def run_room(task: tuple) -> list[dict]:
     from console.link.render import SceneRenderer
     from pipeline.scene import Scene
 
-    seed, n, runs, strategies, budget, scale = task
+    seed, n, runs, strategies, budget, scale, noise_seed = task
     room = paper_search_room() if n < 0 else random_search_room(seed, n)
     tr = truth(room)
     renderer = SceneRenderer(Scene(objects=room.objects), room.shell)
     out = []
     for r, run in enumerate(runs):
         for s, name in enumerate(strategies):
-            rng = np.random.default_rng([seed, n + 1, r, s])
+            rng = np.random.default_rng([seed, n + 1, r, s] + ([noise_seed] if noise_seed else []))
             sim = SimSearch(room, renderer, STRATEGIES[name], rng, RUNS[run], budget, scale, looked=name == "search")
             o = sim.run()
             out.append({"room": room.name, "kind": room.kind, "run": run, "strategy": name, "findable": tr.findable,
@@ -183,6 +183,8 @@ def main(argv: list[str] | None = None) -> int:
                                  epilog="Ratios are against the nearest-frontier baseline in the same run.")
     ap.add_argument("--rooms", type=int, default=50, help="random rooms besides the paper's (default 50)")
     ap.add_argument("--seed", type=int, default=19, help="random seed (default 19)")
+    ap.add_argument("--noise-seed", type=int, default=0,
+                    help="another draw of the perception noise and misses on the same rooms (default 0)")
     ap.add_argument("--budget", type=int, default=12, help="capture budget per search (default 12)")
     ap.add_argument("--jobs", type=int, default=2, help="worker processes (default 2)")
     ap.add_argument("--image-scale", type=float, default=0.5,
@@ -202,6 +204,8 @@ def main(argv: list[str] | None = None) -> int:
     strategies = [s.strip() for s in args.strategies.split(",") if s.strip()]
     if args.rooms < 0:
         ap.error("--rooms must be >= 0")
+    if args.noise_seed < 0:
+        ap.error("--noise-seed must be >= 0")
     if not 1 <= args.budget <= 200:
         ap.error("--budget must be within 1..200")
     if args.jobs < 1:
@@ -221,7 +225,7 @@ def main(argv: list[str] | None = None) -> int:
     rooms = ([] if args.no_paper else [-1]) + list(range(args.rooms))
     if not rooms:
         ap.error("no rooms: give --rooms or leave out --no-paper")
-    tasks = [(args.seed, n, runs, strategies, args.budget, args.image_scale) for n in rooms]
+    tasks = [(args.seed, n, runs, strategies, args.budget, args.image_scale, args.noise_seed) for n in rooms]
     t0 = time.perf_counter()
     records: list[dict] = []
     def done(part: list[dict]) -> None:
@@ -238,7 +242,7 @@ def main(argv: list[str] | None = None) -> int:
                 done(part)
     total = time.perf_counter() - t0
     print(f"{len(rooms)} rooms ({'the paper' + chr(39) + 's + ' if not args.no_paper else ''}{args.rooms} random, "
-          f"seed {args.seed}); budget {args.budget} captures; images {args.image_scale:g} x 640 x 480; "
+          f"seed {args.seed}, noise seed {args.noise_seed}); budget {args.budget} captures; images {args.image_scale:g} x 640 x 480; "
           f"{args.jobs} process{'es' if args.jobs > 1 else ''}; {total:.0f} s; load average "
           f"{os.getloadavg()[0]:.1f} at the end")
     rows = aggregate(records, runs, strategies)
