@@ -197,6 +197,19 @@ NORMAL_MAX_TILT_DEG = 60.0
 """A depth point whose surface normal (from its lattice neighbours) is tilted more than this from the
 prior gravity is on a wall or an object's face, not a floor candidate (wide: a learned map's noise
 tilts a floor's local normals by tens of degrees; a wall is at 90)."""
+BELOW_COST = 4.0
+"""MSAC cost of a depth point lying below a candidate floor (beyond the tolerance), against 1 for any
+other outlier: the floor is the lowest surface in view, so box tops with the floor seen past them lose."""
+MAX_BELOW_SHARE = 0.1
+BELOW_REL = 0.25
+"""A plane with MAX_BELOW_SHARE of the points (at least 10) more than BELOW_REL of its height below it is
+not the floor (the floor seen past a line of boxes whose tops it is): no plane."""
+MIN_PLANE_ROWS = 3
+"""Distinct lattice rows a floor plane's inliers must span (one row's points lie on a plane through the
+camera centre whatever the scene)."""
+MIN_PLANE_HEIGHT_REL = 0.05
+"""A plane passing closer to the camera than this share of its support's distance is seen edge-on
+(grazing): its tilt and height are not told by the points."""
 PLANE_MIN_TOL = 0.005
 PLANE_MIN_TOL_REL = 0.005
 """The depth map's noise floor: a point ``|X|`` metres away is within ``0.5 cm + 0.5 % |X|`` of its
@@ -290,12 +303,16 @@ def plane_from_depth(depth_m: np.ndarray, intr: Intrinsics, prior_gravity: Seque
             continue
         # MSAC: the truncated squared residual, so the plane the points lie ON beats a tilted one that
         # merely keeps the floor and a wall's foot within the tolerance band
-        r2 = np.minimum((pts @ n - hh) ** 2, tol**2) / tol**2
-        cost = float(r2.sum())
+        res = pts @ n - hh
+        r2 = np.minimum(res**2, tol**2) / tol**2
+        # the floor is the lowest surface the camera sees: a point well below a candidate (the floor
+        # seen past a line of boxes whose tops the candidate is) counts against it BELOW_COST times
+        cost = float(r2.sum()) + (BELOW_COST - 1.0) * float(np.count_nonzero(res > tol))
         if best is None or cost < best[0]:
             best = (cost, np.abs(pts @ n - hh) <= tol)
     if best is None or int(best[1].sum()) < 25 or int(best[1].sum()) < 0.2 * n_pts:
         return None
+    rows = vv[ok]
     inl = best[1]
     for _ in range(3):  # refit on the inliers, then re-select them within the map's own noise
         q = pts[inl]
@@ -316,6 +333,15 @@ def plane_from_depth(depth_m: np.ndarray, intr: Intrinsics, prior_gravity: Seque
     n = vt[2] if float(vt[2] @ g0) > 0 else -vt[2]
     hh = float(n @ c)
     if hh <= 0 or float(n @ g0) < cos_max:
+        return None
+    # points of fewer than three image rows lie on planes through the camera centre (one row's rays
+    # span one): such a "floor" tells neither tilt nor height; nor does a plane the camera nearly lies in
+    if len(np.unique(rows[inl])) < MIN_PLANE_ROWS or hh < MIN_PLANE_HEIGHT_REL * float(np.linalg.norm(c)):
+        return None
+    # the floor is the lowest surface in view: a plane with many points far below it is box tops, a desk
+    # (a floor point's depth error e moves it e * H off the floor: BELOW_REL is a 25 % depth error)
+    below = pts @ n - hh > np.maximum(BELOW_REL * hh, tight)
+    if int(np.count_nonzero(below)) >= max(10, MAX_BELOW_SHARE * n_pts):
         return None
     res = q @ n - hh
     # how well the points pin the plane down: their residuals (a depth model's warp, a wall's foot, the
