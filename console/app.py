@@ -363,6 +363,9 @@ class ConsoleApp:
             self.views["objects"] = ObjectsView(
                 server, session, on_node_click=lambda cid: paths_holder["p"].note_node_click(cid) if paths_holder else None,
                 layers=self.views["grid"].layers_folder)
+            from console.views.redo_view import RedoView  # Redo beside the objects panel's Undo; Ctrl+(Shift+)Z
+
+            self.views["redo"] = RedoView(server, session, getattr(self.views["objects"], "_undo", None))
         with gui.add_folder("Plan"):
             paths_holder["p"] = self.views["paths"] = PathsView(server, session)
             self.views["unknown_toggle"] = UnknownToggle(server, session)
@@ -377,9 +380,6 @@ class ConsoleApp:
             self.views["summary"] = SceneSummaryView(server, session)
             self._closers.append(self.views["summary"].close)
         with gui.add_folder("Session", expand_by_default=bool(session.status_text()[1])):
-            from console.views.redo_view import RedoView  # Redo beside the objects panel's Undo; Ctrl+(Shift+)Z
-
-            self.views["redo"] = RedoView(server, session, getattr(self.views["objects"], "_undo", None))
             from console.views.session_files_view import SessionFilesView  # Save as / Load / Delete (ask first)
 
             self.views["session_files"] = SessionFilesView(server, session)
