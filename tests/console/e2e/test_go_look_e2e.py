@@ -28,7 +28,7 @@ from console.app import ConsoleApp, ConsoleConfig
 from console.session.go_look import GO_LOOK, looked_from
 from console.session.session import NOTICE, RUN
 from tests.console.e2e.test_console_e2e import needs_browser
-from tests.console.e2e.test_look_known_space_e2e import LONG, _capture, _click_floor, _page, _wait
+from tests.console.e2e.test_look_known_space_e2e import LONG, _capture, _click_goal, _page, _wait
 
 GOAL = (2.5, 5.0)
 MAX_LOOKS = 4
@@ -49,27 +49,6 @@ def console(tmp_path: Path):
         yield app
     finally:
         app.stop()
-
-
-def _fields(app: ConsoleApp) -> tuple[float, float]:
-    x, y = app.views["paths"].typed_values()[:2]
-    try:
-        return float(x), float(y)
-    except ValueError:
-        return math.nan, math.nan
-
-
-def _click_goal(app: ConsoleApp, page: Any, goal: tuple[float, float], tries: int = 3) -> None:
-    """Click the floor at ``goal`` (top view) until the Goal fields the click fills are within 0.3 m of
-    it: the first click may land while the 3D view is still settling into the top view."""
-    for _ in range(tries):
-        before = _fields(app)
-        _click_floor(app, page, goal)  # fills the Goal x / y fields too
-        _wait(lambda: _fields(app) != before, "the click to fill the Goal fields", 60)
-        x, y = _fields(app)
-        if abs(x - goal[0]) < 0.3 and abs(y - goal[1]) < 0.3:
-            return
-    raise AssertionError(f"the clicks landed at {_fields(app)}, not {goal}")
 
 
 @needs_browser
