@@ -25,6 +25,7 @@ import viser
 from pipeline.rotation import quat_wxyz_yaw, yaw_gltf_quat_wxyz, yaw_quat_wxyz
 from pipeline.scene import SceneObject
 
+from console.views import confirm
 from console.views.client_notice import tell
 from console.views.object_history import history_lines
 from console.views.object_labels import ClientLabels, LabelSpot
@@ -441,12 +442,18 @@ class ObjectsView:
         if obj is None:
             tell(event.client, "Nothing selected", "click an object first (Shift-click in goal mode)", "yellow")
             return
-        try:
-            notes = self._session.delete_object(obj.id)
-        except SessionError as exc:
-            tell(event.client, "Cannot delete", str(exc), "red")
-            return
-        tell(event.client, f"Deleted {obj.label}", "; ".join(notes) or "grid rebuilt", color="blue")
+
+        def delete() -> None:
+            try:
+                notes = self._session.delete_object(obj.id)
+            except SessionError as exc:
+                tell(event.client, "Cannot delete", str(exc), "red")
+                return
+            tell(event.client, f"Deleted {obj.label}", "; ".join(notes) or "grid rebuilt", color="blue")
+
+        confirm.ask(event.client, f"Delete {obj.id}?",
+                    f"{obj.label} {obj.id} leaves the map and the planning grid (Undo brings it back).",
+                    "Delete object", delete)
 
     def colors(self, label: str) -> tuple[int, int, int]:
         """Display colour of a label (the catalog's, else a stable hashed one)."""

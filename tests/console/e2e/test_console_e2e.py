@@ -220,7 +220,8 @@ def test_operator_maps_the_room_and_builds_a_mission(console: ConsoleApp, tmp_pa
             time.sleep(0.5)
             assert session.route_snapshot().candidate_goal is None  # the click was not taken as a goal
             page.get_by_text("source capture").first.wait_for(timeout=60_000)  # the details table (a loaded machine)
-            page.get_by_role("button", name="Delete").click()
+            page.get_by_role("button", name="Delete", exact=True).click()
+            page.get_by_role("button", name="Delete object").click(timeout=60_000)  # the question it asks first
             assert wait_until(lambda: obj.id not in {o.id for o in session.scene.objects}, 10)
             assert wait_until(lambda: obj.id not in app.views["objects"].drawn_ids(), 10)
 

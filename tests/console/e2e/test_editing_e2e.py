@@ -84,6 +84,9 @@ def test_confirmations_redo_zero_length_goals_and_top_view_clicks(tmp_path: Path
                 # --- delete an object; Undo brings it back, Redo takes it away again -----------------------
                 s.select("crate-b")
                 page.get_by_role("button", name="Delete", exact=True).click(timeout=LONG)
+                page.get_by_text("Delete crate-b?").wait_for(timeout=LONG)  # asks first
+                assert "crate-b" in {o.id for o in s.scene.objects}
+                page.get_by_role("button", name="Delete object").click(timeout=LONG)
                 _wait(lambda: "crate-b" not in {o.id for o in s.scene.objects}, "crate-b deleted")
                 undo = page.get_by_role("button", name="Undo delete crate-b")
                 undo.click(timeout=LONG)
