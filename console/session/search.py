@@ -8,8 +8,8 @@ The loop (one search at a time), as the mission manager runs missions, observabl
    it with go-to-object (:func:`planner.object_goal.goal_beside`), go there and end: *found*; seen
    once but not sure: turn to face it and capture again;
 3. otherwise pick the next viewpoint (:func:`console.session.search_choose.choose_viewpoint`) over seen
-   space; when nothing seen still shows unknown space where the target can be, over unknown space
-   too (said in the step: the route's unseen metres), as the operator's *Plan into unknown space*;
+   space: every move of the search (the last one beside the target too) plans with unknown space
+   closed, never through space no capture has seen;
 4. in step mode wait for **Approve**; go there with an Aerial-Ground A* mission through the mission
    runner (walk, take off, fly, land), turn to the viewpoint's heading (a ``TURN`` segment), repeat.
 
@@ -414,7 +414,7 @@ class SearchJob(SearchMoves):
                 self._check_commands()
                 if self._pause.is_set():
                     continue
-                why_not = self._go(vp.goal, "the viewpoint", unknown=choice.unknown)
+                why_not = self._go(vp.goal, "the viewpoint")
                 if why_not in (PAUSED, STOPPED, BATTERY):
                     if why_not == BATTERY:
                         return self._battery_end() or "battery: the console's battery rule ended the move"
@@ -443,26 +443,41 @@ class SearchJob(SearchMoves):
         return ok and not self._stop.is_set()
 
     def _finish(self, obj: Any) -> str:
+        """Go beside the found target over seen space only (never through space no capture has seen).
+
+        When no seen-free spot beside it is reachable, face it and capture once more from where the
+        robot is (a reachable seen-free spot) and plan again; when still none is, end *found, not
+        reached* with where and why. A move that stops (a contact, a refusal) is followed by a capture
+        and a new plan from where the robot is, never the same route again.
+        """
         r = self.result
         assert r is not None
         s = self._session
-        unknown = False
+        looked_again = False
         for _ in range(4):
             if not self._wait_paused():
                 return STOPPED
             here = self._pos()
-            grid = self._grids.grid(s, "allow" if unknown else "closed")
+            obj = next((o for o in s.scene.objects if o.id == obj.id), obj)  # as mapped now
+            grid = self._grids.grid(s, "closed")
             try:
                 _, app = goal_beside(s.scene, grid, obj.id, here, Route(grid, here, s.weights))
             except ObjectGoalError as exc:
-                if not unknown:
-                    unknown = True
+                where = f"{obj.id} at ({obj.position[0]:.2f}, {obj.position[1]:.2f}) m"
+                if looked_again or r.captures >= (self.config.max_captures if self.config else 0):
+                    return f"found, not reached: {where}: no seen-free spot beside it is reachable ({exc})"
+                looked_again = True
+                self._step("move", f"no seen-free spot beside {where} is reachable ({exc}): one more look towards it",
+                           level="warning")
+                if math.dist(here[:2], obj.position[:2]) > 0.3 and not self._turn(heading_to(here, obj.position)) \
+                        and (self._pause.is_set() or self._stop.is_set()):
                     continue
-                return f"found but cannot reach it: {exc}"
+                self._capture(f"looking towards {obj.id} for a way beside it")
+                continue
             if math.dist(here[:2], app.goal[:2]) < 0.2 and here[2] < 0.1:
                 r.found = True
                 return "found"
-            why = self._go(tuple(float(v) for v in app.goal), f"beside {obj.id}", unknown=unknown)
+            why = self._go(tuple(float(v) for v in app.goal), f"beside {obj.id}")
             if why is None:
                 r.found = True
                 return "found"
@@ -472,9 +487,10 @@ class SearchJob(SearchMoves):
                 return self._battery_end() or "battery: the console's battery rule ended the move"
             if why == PAUSED:
                 continue
-            self._step("move", f"the move beside {obj.id} did not end there: {why}; planning again", level="warning")
+            self._step("move", f"the move beside {obj.id} did not end there: {why}; mapping again and planning "
+                       "from here", level="warning")
+            self._capture(f"after the move beside {obj.id} stopped")
         return "found but the move beside it failed"
-
 
 __all__ = ["GAIN_MIN", "MISSION_TIMEOUT", "MODES", "SearchConfig", "SearchJob", "SearchResult", "target_height",
            "target_matches"]

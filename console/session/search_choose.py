@@ -1,12 +1,10 @@
 """The search's next-viewpoint choice in the console, without touching the session's planning rule.
 
 :func:`choose_viewpoint` scores viewpoints (:func:`planner.search_viewpoints.score_viewpoints`) on the
-session's own planning grid when it already is the one needed, first over seen space (the grid with
-unknown space closed) and, when nothing seen shows enough unknown space where the target can be,
-over unknown space too (a grid with unknown space allowed, built here once and kept until the known
-space changes). The session's rule ("Plan into unknown space") is switched only for a move that
-needs it (:class:`~console.session.search.SearchJob`), not for every choice: switching it rebuilds
-the session's grid, saves the session and redraws every tab's grid.
+session's own planning grid when it already is the one needed, over seen space (the grid with unknown
+space closed). Over unknown space too (a grid with unknown space allowed, built here once and kept
+until the known space changes) only when asked (``unknown=True``): the console's search never asks,
+it never plans through space no capture has seen.
 
 World frame (z up) [m], headings [rad], times [s].
 """
@@ -66,17 +64,19 @@ class GridCache:
 
 
 def choose_viewpoint(session: Any, here: tuple[float, float, float], target_height: float,
-                     looked: Any, cache: GridCache) -> Choice:
+                     looked: Any, cache: GridCache, unknown: bool = False) -> Choice:
     """The next viewpoint from the robot at ``here`` (world [m]) for a target ``target_height`` [m] tall.
 
     ``looked``: cells earlier captures had in view that stayed unknown (they count no more).
+    ``unknown``: when nothing seen shows enough, also look over unknown space (a route through space no
+    capture has seen: only when the operator chose it; the console's search never does).
     """
     t0 = time.perf_counter()
     known = session.known_space
     if known is None:
         return Choice(None, "no known space yet", False, (), time.perf_counter() - t0)
     state = known.state()
-    for policy in ("closed", "allow"):
+    for policy in ("closed", "allow") if unknown else ("closed",):
         grid = cache.grid(session, policy)
         start = (here[0], here[1], max(here[2], grid.workspace.floor))
         cell = grid.workspace.cell_of(start)

@@ -31,6 +31,8 @@ STOPPED = "stopped by the operator"
 BATTERY = "battery"
 OPERATOR_PAUSE = re.compile(r"^mission paused (before|during) ")
 """How the mission manager words a pause the operator asked for (a failed or refused step is worded otherwise)."""
+ZERO_LENGTH = re.compile(r"^goal is where the robot already is ")
+"""How the session refuses a goal where the robot already is (:func:`console.session.goal_rules.zero_length`)."""
 
 
 class SearchMoves:
@@ -65,14 +67,16 @@ class SearchMoves:
         except SessionError as exc:
             log.info("search: plan into unknown space: %s", exc)
 
-    def _go(self, goal: tuple[float, float, float], what: str, unknown: bool = False) -> str | None:
-        """Plan from the robot to ``goal`` and run it; ``None`` when there, :data:`PAUSED`,
-        :data:`STOPPED`, :data:`BATTERY`, or why the move did not get there."""
+    def _go(self, goal: tuple[float, float, float], what: str) -> str | None:
+        """Plan from the robot to ``goal`` over seen space only (the session's unknown-space rule closed:
+        the search never plans through space no capture has seen) and run it; ``None`` when there (a goal
+        where the robot already is counts as there), :data:`PAUSED`, :data:`STOPPED`, :data:`BATTERY`,
+        or why the move did not get there."""
         s = self._session  # type: ignore[attr-defined]
         self._check_commands()
         if self._pause.is_set():  # type: ignore[attr-defined]
             return PAUSED
-        self._set_unknown(unknown)
+        self._set_unknown(False)
         try:
             if s.run.active:  # a Land here or Return the operator just started: never edit the route under it
                 self._check_commands()
@@ -86,6 +90,8 @@ class SearchMoves:
         except SessionError as exc:
             self._check_commands()  # a Land here or Return started meanwhile
             return PAUSED if self._pause.is_set() else str(exc)  # type: ignore[attr-defined]
+        if not res.ok and ZERO_LENGTH.match(res.message or ""):  # the planner's zero-length refusal: already there
+            return None
         if not res.ok:
             self._check_commands()
             return PAUSED if self._pause.is_set() else f"no route to {what}: {res.message}"  # type: ignore[attr-defined]
@@ -178,4 +184,4 @@ class SearchMoves:
         return status == "done"
 
 
-__all__ = ["BATTERY", "OPERATOR_PAUSE", "PAUSED", "STOPPED", "SearchMoves"]
+__all__ = ["BATTERY", "OPERATOR_PAUSE", "PAUSED", "STOPPED", "ZERO_LENGTH", "SearchMoves"]
