@@ -46,6 +46,7 @@ from planner.search_viewpoints import Viewpoint, cells_in_view
 from console.session.mapping_job import MappingJob
 from console.session.operator_state import battery_level
 from console.session.search_choose import GridCache, choose_viewpoint
+from console.session.search_finish import SearchFinish, is_contact, untried
 from console.session.search_moves import BATTERY, PAUSED, STOPPED, SearchMoves
 from console.session.search_report import battery_low, left_unseen, result_event, step_event, viewpoint_json
 from console.session.search_types import (
@@ -57,7 +58,7 @@ from console.session.session import RUN, JobStatus, Session, SessionError
 log = logging.getLogger(__name__)
 
 
-class SearchJob(SearchMoves):
+class SearchJob(SearchFinish, SearchMoves):
     """Runs a search in a worker thread.
 
     Args:
@@ -86,6 +87,8 @@ class SearchJob(SearchMoves):
         self._t0 = 0.0
         self._looked: np.ndarray | None = None  # cells in view of a capture that stayed unknown
         self._grids = GridCache()
+        self._confirmed_from: list[tuple[float, float, float]] = []  # spots a confirming capture was taken from
+        self._contact_routes: list[tuple[tuple[float, ...], tuple[float, ...]]] = []  # (start, goal) that hit
         session.subscribe(self._on_event)
 
     def _on_event(self, topic: str, payload: Any) -> None:
@@ -387,20 +390,26 @@ class SearchJob(SearchMoves):
                 if r.captures >= cfg.max_captures:
                     return f"budget: {cfg.max_captures} captures used ({obj.id} seen once, not confirmed)"
                 here = self._pos()
-                self._step("seen", f"{obj.label} {obj.id} seen once: facing it to confirm", 0.7, target_id=obj.id)
-                if math.dist(here[:2], obj.position[:2]) > 0.3 and not self._turn(heading_to(here, obj.position)) \
-                        and (self._pause.is_set() or self._stop.is_set()):
+                if not any(math.dist(here[:2], p[:2]) < 0.5 for p in self._confirmed_from):
+                    self._step("seen", f"{obj.label} {obj.id} seen once: facing it to confirm", 0.7, target_id=obj.id)
+                    if math.dist(here[:2], obj.position[:2]) > 0.3 and not self._turn(heading_to(here, obj.position)) \
+                            and (self._pause.is_set() or self._stop.is_set()):
+                        continue
+                    self._confirmed_from.append(here)
+                    self._capture(f"confirming {obj.id}")
                     continue
-                self._capture(f"confirming {obj.id}")
-                continue
+                self._step("seen", f"{obj.label} {obj.id} seen once; the confirming capture from here missed it: "
+                           "confirming from another viewpoint", 0.7, target_id=obj.id)
             end = self._budget_end(cfg, t0)
             if end is not None:
                 return end
             choice = choose_viewpoint(self._session, self._pos(), cfg.target_height, self._looked, self._grids)
             r.choose_seconds.append(round(choice.seconds, 3))
-            vp = self.chosen = choice.viewpoint
+            here = self._pos()
+            vp = self.chosen = untried(choice, here, self._contact_routes)
             if vp is None:
-                return f"not found: {choice.why}"
+                return f"not found: {choice.why}" if choice.viewpoint is None else \
+                    "not found: the moves to the viewpoints left ended in contact (not repeated)"
             self._step("viewpoint", f"next viewpoint {choice.why}: {vp.why}", min(0.85, r.captures / cfg.max_captures),
                        viewpoint=viewpoint_json(vp), candidates=[viewpoint_json(c) for c in choice.candidates],
                        choose_seconds=round(choice.seconds, 3))
@@ -420,7 +429,11 @@ class SearchJob(SearchMoves):
                         return self._battery_end() or "battery: the console's battery rule ended the move"
                     continue  # stopped: the loop's top says so
                 if why_not is not None:
-                    self._step("move", f"move not done: {why_not}; capturing where the robot is", level="warning")
+                    if is_contact(why_not):
+                        r.contacts += 1
+                        self._contact_routes.append((here, tuple(vp.goal)))
+                    self._step("move", f"move not done: {why_not}; capturing where the robot is and planning again",
+                               level="warning")
             if not self._wait_paused():
                 return STOPPED
             if not self._turn(vp.yaw):
@@ -441,56 +454,6 @@ class SearchJob(SearchMoves):
         ok = self._approve.is_set()
         self._approve.clear()
         return ok and not self._stop.is_set()
-
-    def _finish(self, obj: Any) -> str:
-        """Go beside the found target over seen space only (never through space no capture has seen).
-
-        When no seen-free spot beside it is reachable, face it and capture once more from where the
-        robot is (a reachable seen-free spot) and plan again; when still none is, end *found, not
-        reached* with where and why. A move that stops (a contact, a refusal) is followed by a capture
-        and a new plan from where the robot is, never the same route again.
-        """
-        r = self.result
-        assert r is not None
-        s = self._session
-        looked_again = False
-        for _ in range(4):
-            if not self._wait_paused():
-                return STOPPED
-            here = self._pos()
-            obj = next((o for o in s.scene.objects if o.id == obj.id), obj)  # as mapped now
-            grid = self._grids.grid(s, "closed")
-            try:
-                _, app = goal_beside(s.scene, grid, obj.id, here, Route(grid, here, s.weights))
-            except ObjectGoalError as exc:
-                where = f"{obj.id} at ({obj.position[0]:.2f}, {obj.position[1]:.2f}) m"
-                if looked_again or r.captures >= (self.config.max_captures if self.config else 0):
-                    return f"found, not reached: {where}: no seen-free spot beside it is reachable ({exc})"
-                looked_again = True
-                self._step("move", f"no seen-free spot beside {where} is reachable ({exc}): one more look towards it",
-                           level="warning")
-                if math.dist(here[:2], obj.position[:2]) > 0.3 and not self._turn(heading_to(here, obj.position)) \
-                        and (self._pause.is_set() or self._stop.is_set()):
-                    continue
-                self._capture(f"looking towards {obj.id} for a way beside it")
-                continue
-            if math.dist(here[:2], app.goal[:2]) < 0.2 and here[2] < 0.1:
-                r.found = True
-                return "found"
-            why = self._go(tuple(float(v) for v in app.goal), f"beside {obj.id}")
-            if why is None:
-                r.found = True
-                return "found"
-            if why == STOPPED or self._stop.is_set():
-                return STOPPED
-            if why == BATTERY:
-                return self._battery_end() or "battery: the console's battery rule ended the move"
-            if why == PAUSED:
-                continue
-            self._step("move", f"the move beside {obj.id} did not end there: {why}; mapping again and planning "
-                       "from here", level="warning")
-            self._capture(f"after the move beside {obj.id} stopped")
-        return "found but the move beside it failed"
 
 __all__ = ["GAIN_MIN", "MISSION_TIMEOUT", "MODES", "SearchConfig", "SearchJob", "SearchResult", "target_height",
            "target_matches"]

@@ -79,7 +79,8 @@ class SearchResult:
     """How a search ended (``result.json``).
 
     ``left_unseen``: what was not seen when it ended and why (``""`` when found); ``choose_seconds``:
-    the time of each next-viewpoint choice [s].
+    the time of each next-viewpoint choice [s]; ``contacts``: moves that ended in a contact with something
+    the map did not show (each followed by a capture and a new plan, never the same route again).
     """
 
     found: bool = False
@@ -97,6 +98,7 @@ class SearchResult:
     left_unseen: str = ""
     battery: float | None = None
     choose_seconds: list[float] = field(default_factory=list)
+    contacts: int = 0
     steps: list[str] = field(default_factory=list)
 
     def to_json(self) -> str:

@@ -1,0 +1,112 @@
+"""The search's last approach and its retries (mixed into :class:`console.session.search.SearchJob`).
+
+:meth:`SearchFinish._finish` goes beside the found target over seen space only (unknown space
+closed: the search never plans through space no capture has seen). A move that ends in a contact
+with something the map did not show is counted (``contacts`` in the result), followed by a capture
+and a new plan from where the robot stopped, and never repeated from the same spot to the same goal
+(:func:`repeats`, :func:`untried`). World frame (z up) [m].
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any, Sequence
+
+from planner.mission import heading_to
+from planner.object_goal import ObjectGoalError, goal_beside
+from planner.route import Route
+from planner.search_viewpoints import Viewpoint
+
+from console.session.search_moves import BATTERY, PAUSED, STOPPED
+
+SAME = 0.3
+"""Starts and goals closer than this [m] make the same route."""
+
+Routes = list[tuple[tuple[float, ...], tuple[float, ...]]]
+
+
+def is_contact(why: str | None) -> bool:
+    """Whether a move's end (its reason) was a contact with an object (the simulator's and the autopilot's
+    words: ``contact with ...``)."""
+    return bool(why) and "contact with" in str(why)
+
+
+def repeats(start: Sequence[float], goal: Sequence[float], hit: Routes) -> bool:
+    """Whether a move from ``start`` to ``goal`` is one that already ended in a contact."""
+    return any(math.dist(start, a) < SAME and math.dist(goal, b) < SAME for a, b in hit)
+
+
+def untried(choice: Any, here: Sequence[float], hit: Routes) -> Viewpoint | None:
+    """The chosen viewpoint, or the best other candidate when the move to it from ``here`` already ended
+    in a contact; ``None`` when none is left (or none was chosen)."""
+    if choice.viewpoint is None:
+        return None
+    for vp in (choice.viewpoint, *choice.candidates):
+        if not repeats(here, vp.goal, hit):
+            return vp
+    return None
+
+
+class SearchFinish:
+    """Mixin: the search's last approach (see the module docstring). Uses the job's ``result``, ``config``,
+    ``_session``, ``_grids``, ``_contact_routes``, ``_go``, ``_turn``, ``_capture``, ``_pos``, ``_step``,
+    ``_wait_paused``, ``_battery_end``, ``_pause`` and ``_stop``."""
+
+    def _finish(self, obj: Any) -> str:
+        """Go beside the found target over seen space only (never through space no capture has seen).
+
+        When no seen-free spot beside it is reachable, face it and capture once more from where the
+        robot is (a reachable seen-free spot) and plan again; when still none is, end *found, not
+        reached* with where and why. A move that stops (a contact, a refusal) is followed by a capture
+        and a new plan from where the robot is, never the same route again.
+        """
+        r = self.result
+        assert r is not None
+        s = self._session
+        looked_again = False
+        for _ in range(4):
+            if not self._wait_paused():
+                return STOPPED
+            here = self._pos()
+            obj = next((o for o in s.scene.objects if o.id == obj.id), obj)  # as mapped now
+            grid = self._grids.grid(s, "closed")
+            try:
+                _, app = goal_beside(s.scene, grid, obj.id, here, Route(grid, here, s.weights))
+            except ObjectGoalError as exc:
+                where = f"{obj.id} at ({obj.position[0]:.2f}, {obj.position[1]:.2f}) m"
+                if looked_again or r.captures >= (self.config.max_captures if self.config else 0):
+                    return f"found, not reached: {where}: no seen-free spot beside it is reachable ({exc})"
+                looked_again = True
+                self._step("move", f"no seen-free spot beside {where} is reachable ({exc}): one more look towards it",
+                           level="warning")
+                if math.dist(here[:2], obj.position[:2]) > 0.3 and not self._turn(heading_to(here, obj.position)) \
+                        and (self._pause.is_set() or self._stop.is_set()):
+                    continue
+                self._capture(f"looking towards {obj.id} for a way beside it")
+                continue
+            if math.dist(here[:2], app.goal[:2]) < 0.2 and here[2] < 0.1:
+                r.found = True
+                return "found"
+            goal = tuple(float(v) for v in app.goal)
+            if repeats(here, goal, self._contact_routes):
+                return f"found, not reached: {obj.id}: the route beside it ended in contact before (not repeated)"
+            why = self._go(goal, f"beside {obj.id}")
+            if why is None:
+                r.found = True
+                return "found"
+            if why == STOPPED or self._stop.is_set():
+                return STOPPED
+            if why == BATTERY:
+                return self._battery_end() or "battery: the console's battery rule ended the move"
+            if why == PAUSED:
+                continue
+            if is_contact(why):
+                r.contacts += 1
+                self._contact_routes.append((here, goal))
+            self._step("move", f"the move beside {obj.id} did not end there: {why}; mapping again and planning "
+                       "from here", level="warning")
+            self._capture(f"after the move beside {obj.id} stopped")
+        return "found but the move beside it failed"
+
+
+__all__ = ["SAME", "SearchFinish", "is_contact", "repeats", "untried"]
