@@ -98,6 +98,7 @@ class GoLookJob:
         self._session, self._link, self._mapping, self._runner = session, link, mapping, runner
         self._lock = threading.Lock()
         self._thread: threading.Thread | None = None
+        self._ended = False  # the run said it ended (its thread may still be finishing)
         self._pause = threading.Event()
         self._stop = threading.Event()
         self.outcome = GoLookOutcome()
@@ -106,7 +107,8 @@ class GoLookJob:
     @property
     def running(self) -> bool:
         with self._lock:
-            return self._thread is not None and self._thread.is_alive()
+            # ended once it said so: its last event must already read 'not running' (the panels redraw on it)
+            return self._thread is not None and self._thread.is_alive() and not self._ended
 
     @property
     def paused(self) -> bool:
@@ -151,6 +153,7 @@ class GoLookJob:
                 self.outcome = GoLookOutcome(target=goal)
             self._pause.clear()
             self._stop.clear()
+            self._ended = False
             self._thread = threading.Thread(target=self._run, args=(goal,), name="go-look", daemon=True)
             self._report(0.0, f"towards {_fmt(goal[:2])}: choosing where to look from")
             self._thread.start()
@@ -191,6 +194,8 @@ class GoLookJob:
     # --- worker --------------------------------------------------------------------------------------
     def _report(self, fraction: float, message: str, running: bool = True, error: str | None = None) -> None:
         self.outcome.message = error or message
+        if not running:
+            self._ended = True
         self._session.set_job(JobStatus(GO_LOOK, running, max(0.0, min(1.0, fraction)), message, error))
 
     def _hold(self) -> None:

@@ -62,6 +62,7 @@ class LookJob:
         self._mapping = mapping
         self._lock = threading.Lock()
         self._thread: threading.Thread | None = None
+        self._ended = False  # the run said it ended (its thread may still be finishing)
         self._pause = threading.Event()
         self._stop = threading.Event()
         self._wake = threading.Event()
@@ -72,7 +73,8 @@ class LookJob:
     @property
     def running(self) -> bool:
         with self._lock:
-            return self._thread is not None and self._thread.is_alive()
+            # ended once it said so: its last event must already read 'not running' (the panels redraw on it)
+            return self._thread is not None and self._thread.is_alive() and not self._ended
 
     @property
     def paused(self) -> bool:
@@ -159,11 +161,14 @@ class LookJob:
             self._stop.clear()
             self._wake.clear()
             self.last_mapped = []
+            self._ended = False
             self._thread = threading.Thread(target=self._run, args=(name, yaws), name="look", daemon=True)
             self._report(name, 0.0, f"starting ({len(yaws)} heading{'s' if len(yaws) > 1 else ''})")
             self._thread.start()
 
     def _report(self, name: str, fraction: float, message: str, running: bool = True, error: str | None = None) -> None:
+        if not running:
+            self._ended = True
         self._session.set_job(JobStatus(name, running, max(0.0, min(1.0, fraction)), message, error))
 
     def _hold(self) -> None:

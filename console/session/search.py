@@ -72,6 +72,7 @@ class SearchJob(SearchFinish, SearchMoves):
         self._session, self._link, self._mapping, self._runner = session, link, mapping, runner
         self._lock = threading.Lock()
         self._thread: threading.Thread | None = None
+        self._ended = False  # the run said it ended (its thread may still be finishing)
         self._pause = threading.Event()
         self._stop = threading.Event()
         self._approve = threading.Event()
@@ -100,7 +101,8 @@ class SearchJob(SearchFinish, SearchMoves):
     @property
     def running(self) -> bool:
         with self._lock:
-            return self._thread is not None and self._thread.is_alive()
+            # ended once it said so: its last event must already read 'not running' (the panels redraw on it)
+            return self._thread is not None and self._thread.is_alive() and not self._ended
 
     @property
     def paused(self) -> bool:
@@ -140,6 +142,7 @@ class SearchJob(SearchFinish, SearchMoves):
             self._looked = None
             self._t0 = time.monotonic()
             self._land_nearest(True)  # before the thread: its end turns it off
+            self._ended = False
             self._thread = threading.Thread(target=self._run, name="search", daemon=True)
             self._thread.start()
 
@@ -335,6 +338,7 @@ class SearchJob(SearchFinish, SearchMoves):
         text = (f"found {r.target_id} at {r.distance_to_target:.2f} m" if r.found and r.distance_to_target is not None
                 else r.reason)
         self._land_nearest(False)
+        self._ended = True
         s.set_job(JobStatus(self._name(), False, 1.0, f"{text}: {r.captures} captures, {r.path_length:.1f} m, "
                                                        f"{r.time:.0f} s"))
         s.notify(self._name(), f"{text} ({r.captures} captures, {r.path_length:.1f} m travelled)"

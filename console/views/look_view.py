@@ -11,7 +11,6 @@ the line under the buttons says what the last Go look found and where the next l
 from __future__ import annotations
 
 import html
-import threading
 from typing import Any, Callable
 
 import viser
@@ -20,6 +19,7 @@ from console.session.go_look import GoLookJob
 from console.session.look import DEFAULT_HEADINGS, LookJob
 from console.session.session import JOB, RUN, Session, SessionError
 from console.views.client_notice import tell
+from console.views.refresher import Refresher
 
 
 class LookView:
@@ -60,6 +60,7 @@ class LookView:
         self.pause.on_click(lambda e: self._act(e, lambda: self._running().pause()))
         self.resume.on_click(lambda e: self._act(e, lambda: self._running().resume()))
         self.stop.on_click(lambda e: self._act(e, lambda: self._running().stop()))
+        self._refresher = Refresher(self._refresh, "look-view")
         session.subscribe(self._on_event)
         self.refresh()
 
@@ -94,14 +95,13 @@ class LookView:
 
     def _on_event(self, topic: str, payload: Any) -> None:
         if topic in (JOB, RUN):
-            threading.Thread(target=self.refresh, daemon=True).start()  # never block the session's caller
+            self._refresher.poke()  # never block the session's caller; the last redraw shows the latest state
 
     def refresh(self) -> None:
         """Buttons as the look's state allows."""
-        if not self._session.job.running:
-            self._job.wait(1.0)  # the look's last report comes just before its thread ends
-            if self._go is not None:
-                self._go.wait(1.0)
+        self._refresher.now()
+
+    def _refresh(self) -> None:
         job = self._running()
         running, paused = job.running, job.paused
         go_running = self._go is not None and self._go.running

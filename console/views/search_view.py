@@ -8,7 +8,6 @@ the panel's line and in the Map folder's job line ("Find: robot dog: next viewpo
 from __future__ import annotations
 
 import html
-import threading
 from typing import Any, Callable
 
 import numpy as np
@@ -19,6 +18,7 @@ from console.session.search import MODES, SearchConfig, SearchJob
 from console.session.search_types import BATTERY_RESERVE
 from console.session.session import JOB, RUN, SEARCH, Session, SessionError
 from console.views.client_notice import tell
+from console.views.refresher import Refresher
 
 
 def _put(handle: Any, name: str, value: Any) -> None:
@@ -67,6 +67,7 @@ class SearchView:
         self._marker: Any = None
         self._label: Any = None
         self._drawn: Any = None
+        self._refresher = Refresher(self._refresh, "search-view")
         session.subscribe(self._on_event)
         self.refresh()
 
@@ -90,7 +91,7 @@ class SearchView:
 
     def _on_event(self, topic: str, payload: Any) -> None:
         if topic in (JOB, RUN, SEARCH):
-            threading.Thread(target=self.refresh, daemon=True).start()  # never block the session's caller
+            self._refresher.poke()  # never block the session's caller; the last redraw shows the latest state
 
     def drawn_viewpoint(self) -> Any:
         """The viewpoint drawn now (tests), or ``None``."""
@@ -98,6 +99,9 @@ class SearchView:
 
     def refresh(self) -> None:
         """Buttons, the step line and the viewpoint marker as the search's state allows."""
+        self._refresher.now()
+
+    def _refresh(self) -> None:
         job = self._job
         running, paused = job.running, job.paused
         _put(self.start, "disabled", running or self._session.run.active)
