@@ -45,7 +45,12 @@ MAX_RANGE = 8.0
 """Depth [m] beyond which a reading only marks free space up to this range (no hit)."""
 
 FLOOR_BAND = 0.10
-"""Surfaces at most this high [m] above the floor are the floor (not obstacles)."""
+"""Surfaces at most this high [m] above the floor are the floor (not obstacles), for a depth with noise
+(a depth model's scaled map): nearer the floor its noise cannot tell a surface from the floor."""
+
+FLOOR_BAND_EXACT = 0.02
+"""The same for exact depth (the simulator's render, noise 0): a 5 cm sports mat is an obstacle, not floor
+(the robot's body touches it when it walks or lands there)."""
 
 EDGE_TOLERANCE = 0.02
 """Surfaces within this [m] (plus their sigma) of the grid's side faces are the room's walls."""
@@ -203,7 +208,7 @@ def _cast(mark, origin, res, nx, ny, nz, cam, dirs, depth, sig_rel, sig_abs, max
 
 def capture_update(space: KnownSpace, depth_m: np.ndarray, intrinsics: Intrinsics, camera: Pose, *,
                    noise: DepthNoise = DepthNoise(), pixel_step: int | None = None, max_range: float = MAX_RANGE,
-                   floor_band: float = FLOOR_BAND) -> CaptureUpdate:
+                   floor_band: float | None = None) -> CaptureUpdate:
     """Update ``space`` with one capture's metric depth map (see the module docstring).
 
     Args:
@@ -215,7 +220,8 @@ def capture_update(space: KnownSpace, depth_m: np.ndarray, intrinsics: Intrinsic
         noise: The depth's 1-sigma uncertainty (0 for the simulator's exact depth).
         pixel_step: Sample every n-th pixel (default :func:`default_pixel_step`).
         max_range: Readings farther than this [m] mark free space up to it only.
-        floor_band: Surfaces this close [m] above the floor are floor.
+        floor_band: Surfaces this close [m] above the floor are floor (default :data:`FLOOR_BAND_EXACT`
+            for exact depth, ``noise`` 0; else :data:`FLOOR_BAND`).
 
     Raises:
         KnownSpaceError: Bad arguments (naming the field).
@@ -229,6 +235,8 @@ def capture_update(space: KnownSpace, depth_m: np.ndarray, intrinsics: Intrinsic
                               f"got shape {d.shape}")
     if not np.issubdtype(d.dtype, np.number):
         raise KnownSpaceError(f"depth: must be numbers [m], got {d.dtype}")
+    if floor_band is None:
+        floor_band = FLOOR_BAND_EXACT if noise.relative == 0 and noise.absolute == 0 else FLOOR_BAND
     for name, v in (("max_range", max_range), ("floor_band", floor_band)):
         if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or v < 0:
             raise KnownSpaceError(f"{name}: must be a finite number >= 0 [m], got {v!r}")
@@ -343,5 +351,5 @@ def explained_share(depth_m: np.ndarray, intrinsics: Intrinsics, camera: Pose, o
     return DepthExplained(e / n, n, e)
 
 
-__all__ = ["CaptureUpdate", "DepthExplained", "DepthNoise", "FLOOR_BAND", "LOW_EXPLAINED", "MAX_RANGE", "NEAR_RANGE",
+__all__ = ["CaptureUpdate", "DepthExplained", "DepthNoise", "FLOOR_BAND", "FLOOR_BAND_EXACT", "LOW_EXPLAINED", "MAX_RANGE", "NEAR_RANGE",
            "box_depth", "capture_update", "default_pixel_step", "explained_share"]
