@@ -28,6 +28,7 @@ from pipeline.ranging.distance import (
 from pipeline.ranging.fusion import Cue, Fused, fuse_cues
 from pipeline.camera.geometry import Intrinsics
 from pipeline.ranging.ground_contact import GroundModel, border_bound, ground_contact_cue
+from pipeline.ranging.hidden_bottom import placed_centre
 from pipeline.ranging.gravity_spread import gravity_sigma_z, widen_for_gravity
 from pipeline.mapper_config import MIN_DEPTH_SIGMA, MapperConfig
 from pipeline.ranging.measured_height import HeightEstimate, estimate_height
@@ -355,6 +356,7 @@ class Ranger:
             c = centre_on_ray(uv, surface if surface is not None else fused.distance,
                               self._half_depth(obj, surface or fused.distance, intr), intr)
         obj.center_cam = c * (fused.distance / float(c[2]))
+        obj.center_cam = placed_centre(obj, self.ground, intr)  # a lower part hidden: from the top edge
         if not obj.size_known:
             obj.size = self._measured_size(obj, surface if surface is not None else fused.distance, intr)
         elif obj.on_floor and self.ground is not None and self.config.measure_height:

@@ -108,24 +108,37 @@ def test_a_border_sliver_does_not_move_a_desk_and_a_cut_view_barely_moves_a_chai
     assert abs(after.object("office_chair-1").yaw - chair.yaw) < math.radians(2)  # its heading says nothing
 
 
-def test_the_cabinet_behind_the_box_line_rests_on_the_floor_and_is_flagged() -> None:
+def test_the_cabinet_behind_the_box_line_rests_on_the_floor_without_a_correction() -> None:
     obs = capture(START, "start")
     seen = [o for o in obs.objects if o.label == "office_cabinet"]
-    assert seen and seen[0].position[2] > 1.5  # the mapper's estimate floats (only its top is visible)
+    # only its top is visible: the mapper places it from that top edge (it was 1.87 m up, "floating")
+    assert seen and abs(seen[0].position[2] - TRUTH["office_cabinet-1"].position[2]) <= 0.1
     scene, report = fuse(Scene(), obs)
     cab, _ = nearest(scene, "office_cabinet-1")
-    assert cab.position[2] == pytest.approx(cab.size[1] / 2)
-    assert abs(cab.position[2] - TRUTH["office_cabinet-1"].position[2]) <= 0.05
-    assert cab.flags and "floating" in cab.flags[0]
-    assert any(oid == cab.id and "floating" in what for oid, what in report.corrections)
-    # the planner no longer walks through its real footprint (the floating estimate left the floor free)
+    assert abs(cab.position[2] - TRUTH["office_cabinet-1"].position[2]) <= 0.1
+    assert not any(oid == cab.id and "floating" in what for oid, what in report.corrections)
     ws = Workspace()
     floor = ws.cell_of((4.75, 6.2, 0.1))  # the hidden cabinet's centre, just above the floor
-    assert build_grid(Scene(objects=tuple(seen)), ws, 0.35).state_at(floor) is CellState.FREE
     assert build_grid(scene, ws, 0.35).state_at(floor) is CellState.OCCUPIED
     for o in scene.objects:  # every floor object of the map stands on the floor or on another object
         if o.label in ("desk", "office_chair", "office_cabinet"):
-            assert abs(o.position[2] - o.size[1] / 2) <= 0.05, o
+            assert abs(o.position[2] - o.size[1] / 2) <= 0.1, o
+
+
+def test_a_floating_cabinet_is_set_on_the_floor_and_flagged() -> None:
+    """A floor object placed well above the floor (a lower part hidden and not recognised) is set on it."""
+    cab = SceneObject("office_cabinet-1", "office_cabinet", (2.5, 6.2, 1.87), (0.8, 1.85, 0.42),
+                      source=Source("c1", "depth"))  # away from the walls (the workspace's edge closes its own band)
+    scene, report = fuse(Scene(), Scene(objects=(cab,), captures=(Capture("c1"),)))
+    got = scene.object("office_cabinet-1")
+    assert got.position[2] == pytest.approx(got.size[1] / 2)
+    assert got.flags and "floating" in got.flags[0]
+    assert any(oid == got.id and "floating" in what for oid, what in report.corrections)
+    # the planner no longer walks through its real footprint (the floating estimate left the floor free)
+    ws = Workspace()
+    floor = ws.cell_of((2.5, 6.2, 0.1))
+    assert build_grid(Scene(objects=(cab,)), ws, 0.35).state_at(floor) is CellState.FREE
+    assert build_grid(scene, ws, 0.35).state_at(floor) is CellState.OCCUPIED
 
 
 def test_a_box_on_a_desk_stays_on_the_desk() -> None:
