@@ -27,9 +27,13 @@ frame (z up) [m], yaw about +z [rad], sizes ``(w, h, l)`` [m] (see :mod:`pipelin
 4. **Pinned objects** (:attr:`~pipeline.scene.SceneObject.is_pinned`: the operator moved, typed or
    confirmed them) never move: a matching observation (near the pinned place, or near any of its
    earlier observations) is recorded in its history and creates no duplicate.
-5. **Support** (:mod:`pipeline.mapping.map_support`): a floor-standing class rests on the floor or on the
+5. **Duplicates** (:mod:`pipeline.mapping.map_merge`): two objects of the map before this capture, of one
+   class, that now overlap in footprint and height are one object mapped twice (a false or partial
+   box beside a real one started the second): the older keeps its id and takes the other's
+   observations, unless one capture detected both whole, apart; pinned objects are left alone.
+6. **Support** (:mod:`pipeline.mapping.map_support`): a floor-standing class rests on the floor or on the
    object under it; a floating or buried estimate is corrected and flagged.
-6. **Consistency** (:mod:`pipeline.mapping.map_consistency`): a capture whose objects match nothing the map
+7. **Consistency** (:mod:`pipeline.mapping.map_consistency`): a capture whose objects match nothing the map
    expects in view is held back (map unchanged) unless ``check_consistency=False``.
 """
 
@@ -44,6 +48,7 @@ from scipy.optimize import linear_sum_assignment
 
 from pipeline.mapping import map_consistency
 from pipeline.mapping.map_extent import RAY_SIGMAS, along_ray_match, next_id, outside_workspace
+from pipeline.mapping.map_merge import check_bounds, merge_overlapping, taken_overlap
 from pipeline.mapping.map_support import footprint_overlap, supported_z, vertical_overlap
 from pipeline.mapping.observation_sigma import (MIN_RANGE, ObservationSigma, degenerate, distance_to_box,
                                                 observation_sigma, ray_covariance)
@@ -112,6 +117,8 @@ class FusionReport:
     """``(object id, what was corrected)`` for objects moved onto their support."""
     held_back: str | None = None
     """Why the capture was not merged (the map is unchanged), ``None`` if it was."""
+    merged: tuple[tuple[str, str], ...] = ()
+    """``(kept id, removed id)``: two objects of one class that overlapped, merged (one object mapped twice)."""
 
     def ids(self, action: Action) -> list[str]:
         """Map object ids (``observation`` ids for ``rejected``) with this outcome."""
@@ -141,6 +148,7 @@ class FusionReport:
         out += [f"{o.object_id} is pinned: seen again at the capture, not moved" if o.reason != EXTENT_NOTE
                 else f"{o.object_id}: {o.reason}" for o in self.outcomes if o.action == "recorded"]
         out += [f"{oid}: {what}" for oid, what in self.corrections]
+        out += [f"{gone} merged into {kept}: they overlapped (one object mapped twice)" for kept, gone in self.merged]
         if self.held_back:
             out.insert(0, f"capture held back: {self.held_back}")
         return out
@@ -318,6 +326,8 @@ def _assign(obs: Sequence[SceneObject], covs: Sequence[np.ndarray], objects: Seq
 
 def _refit(obj: SceneObject, history: tuple[Sighting, ...], newest: SceneObject) -> SceneObject:
     used = [s for s in history if s.used]
+    if not used:
+        return replace(obj, history=history)
     pos, _, yaw, size = _estimate(used)
     return replace(obj, position=tuple(float(v) for v in pos), yaw=yaw,  # type: ignore[arg-type]
                    size=size if not obj.size_known else obj.size, history=history,
@@ -348,7 +358,7 @@ def fuse(scene: Scene, observations: Scene, *, catalog: Any = None, config: Fusi
     """
     cfg = config or FusionConfig()
     if bounds is not None:
-        bounds = _check_bounds(bounds)
+        bounds = check_bounds(bounds)
     check = cfg.check_consistency if check_consistency is None else check_consistency
     if catalog is None:
         from pipeline.catalog import default_catalog
@@ -405,7 +415,8 @@ def fuse(scene: Scene, observations: Scene, *, catalog: Any = None, config: Fusi
             if near < MIN_RANGE:
                 reason = f"camera too close: {near:.2f} m from {m.id} (under {MIN_RANGE:g} m)"
         if j is None:
-            reason = reason or _taken_overlap(o, objects, set(match.values()), keys, cfg)
+            taken = set(match.values())
+            reason = reason or taken_overlap(o, objects, taken, keys, cfg.min_overlap, cfg.min_vertical)
             if reason is None and bounds is not None:
                 out, reach = outside_workspace(o, bounds[0], bounds[1])
                 if out:
@@ -438,33 +449,14 @@ def fuse(scene: Scene, observations: Scene, *, catalog: Any = None, config: Fusi
         touched.add(m.id)
         outcomes.append(Outcome(o.id, o.label, "updated", m.id, "", sig[i].along))
 
+    merged = merge_overlapping(objects, touched, keys, cfg.min_overlap, cfg.min_vertical,
+                               lambda a, b: _refit(a, _history(a, captures) + _history(b, captures), a),
+                               {o.id for o in scene.objects})
     corrections = _support(objects, touched)
     known = {c.id for c in scene.captures}
     new_caps = scene.captures + tuple(c for c in observations.captures if c.id not in known)
-    return Scene(objects=tuple(objects), captures=new_caps), FusionReport(tuple(outcomes), tuple(corrections))
-
-
-def _taken_overlap(o: SceneObject, objects: Sequence[SceneObject], taken: set[int], keys: dict[str, str],
-                   cfg: FusionConfig) -> str | None:
-    """Why ``o`` may not become a new object: it overlaps an object of its class that another
-    observation of the same capture updated (``None``: it may)."""
-    for j in sorted(taken):
-        m = objects[j]
-        if keys[m.label] == keys[o.label] and vertical_overlap(o, m) >= cfg.min_vertical \
-                and footprint_overlap(o, m) >= cfg.min_overlap:
-            return f"overlaps {m.id}, which another detection of this capture updated: not added"
-    return None
-
-
-def _check_bounds(bounds: Any) -> tuple[tuple[float, ...], tuple[float, ...]]:
-    try:
-        lo, hi = (tuple(float(v) for v in b) for b in bounds)
-    except (TypeError, ValueError):
-        raise ValueError(f"fuse.bounds: must be (min, max), two 3-vectors [m], got {bounds!r}") from None
-    if len(lo) != 3 or len(hi) != 3 or not all(math.isfinite(v) for v in lo + hi) \
-            or not all(a < b for a, b in zip(lo, hi)):
-        raise ValueError(f"fuse.bounds: must be two finite 3-vectors with min < max [m], got {bounds!r}")
-    return lo, hi
+    return Scene(objects=tuple(objects), captures=new_caps), FusionReport(tuple(outcomes), tuple(corrections),
+                                                                          merged=tuple(merged))
 
 
 def _support(objects: list[SceneObject], touched: set[str]) -> list[tuple[str, str]]:
