@@ -151,7 +151,8 @@ class ConsoleApp:
         self.link = self._link_override if self._link_override is not None else self._open_link(cfg.robot, cfg.captures, options)
         start = world.start.translation
         ws = world.workspace(cfg.resolution)
-        self.session = session = Session(cfg.session_dir, start=start, workspace=ws, margin=cfg.margin)
+        self.session = session = Session(cfg.session_dir, start=start, workspace=ws, margin=cfg.margin,
+                                         empty_is_unseen=True)  # a room nobody has looked at: nothing seen yet
         restored: list[str] | None = None
         if not cfg.fresh:  # a bad file is kept aside by the session; SessionError (what to do) if it cannot be
             restored = session.restore_last()

@@ -1,8 +1,12 @@
 """Known space in the console's session: updated by every capture, saved, restored, undone with it.
 
 The session holds one :class:`~pipeline.mapping.known_space.KnownSpace` on the planning grid's cells
-(world frame, z up [m]), or ``None`` before the first capture (a map made only of scene files is
-then taken as fully known, as the planner does without known space). Each mapped capture casts its
+(world frame, z up [m]), or ``None`` before the first capture. Before the first capture the console's
+map (``Session(empty_is_unseen=True)``) with no scene file spawned or loaded is *nothing seen*: it is
+planned as all unknown space (:meth:`KnownSpaceSession.nothing_seen_locked`), so every way of planning
+(a goal, Return, Land here, a search, Go look) refuses to cross it while unknown space is closed; a map
+made of scene files (a hand-made map), and any session made without that flag (scripts), is taken as
+fully known, as the planner does without known space. Each mapped capture casts its
 depth (the simulator's rendered depth, a depth model's scaled map, or, without either, the mapped
 boxes: :func:`~pipeline.mapping.known_space_update.box_depth`) through it, and the robot's own body
 at the capture is free by definition. The planning grid is rebuilt with it: walking and flying only
@@ -49,6 +53,9 @@ the robot's own cells are free by definition (it stands there), and the camera (
 degrees below the horizon at the edge of its view) cannot see the floor nearer than about 0.77 m.
 Farther floor the camera did not see stays unknown. Cells a capture saw occupied keep that."""
 
+_CURRENT: Any = object()
+"""Default of the ``known`` arguments below: the session's own known space."""
+
 DEPTH_NOISE_REL = 0.05
 """Relative 1-sigma depth error [1] assumed for a depth model's scaled map (the simulator's is exact)."""
 
@@ -64,6 +71,9 @@ class KnownSpaceSummary:
         unknown: Cells no capture has seen.
         unlabelled: Occupied cells no mapped object explains (obstacles the detector missed).
         policy: ``closed`` (only seen-free space is planned through) or ``allow``.
+        rule: ``captures`` (known space from captures), ``nothing_seen`` (no capture yet on the console's
+            own map: every cell unknown) or ``fully_known`` (no known space: a hand-made map).
+        given: With ``fully_known``: the map came from scene files (spawned or loaded).
     """
 
     cells: int = 0
@@ -72,6 +82,8 @@ class KnownSpaceSummary:
     unknown: int = 0
     unlabelled: int = 0
     policy: str = "closed"
+    rule: str = "captures"
+    given: bool = False
 
     @property
     def seen_share(self) -> float:
@@ -79,9 +91,14 @@ class KnownSpaceSummary:
 
     def text(self) -> str:
         """``known space: 38 % seen · 12 unlabelled obstacle cells · unknown space closed``."""
-        if not self.cells:
-            return "known space: none yet (Capture & map builds it); the map is taken as fully known"
         rule = "unknown space closed" if self.policy == "closed" else "planning into unknown space"
+        if self.rule == "nothing_seen":
+            then = ("no goal is planned until Capture & map or Look around" if self.policy == "closed"
+                    else "routes cross space no capture has seen (drawn dashed)")
+            return f"known space: nothing seen yet (every cell is unknown) · {rule}: {then}"
+        if not self.cells:
+            what = "the map from scene files" if self.given else "the map"
+            return f"known space: none yet (Capture & map builds it); {what} is taken as fully known"
         cells = "cell" if self.unlabelled == 1 else "cells"
         return (f"known space: {100 * self.seen_share:.0f} % seen · {self.unlabelled} unlabelled obstacle {cells}"
                 f" · {rule}")
@@ -176,6 +193,8 @@ class KnownSpaceSession:
     _outbox: list[Notice]
     _known: KnownSpace | None
     _plan_unknown: str
+    _empty_is_unseen: bool
+    _map_given: bool
     _emit: Any
     _save_locked: Any
     _mission_after_edit_locked: Any
@@ -197,8 +216,12 @@ class KnownSpaceSession:
     def known_summary(self) -> KnownSpaceSummary:
         with self._lock:
             known, scene, policy = self._known, self._scene, self._plan_unknown
+            nothing, given = self.nothing_seen_locked(), self._map_given
+        if nothing:
+            n = int(np.prod(self._workspace.shape))
+            return KnownSpaceSummary(n, 0, 0, n, 0, policy, "nothing_seen")
         if known is None:
-            return KnownSpaceSummary(policy=policy)
+            return KnownSpaceSummary(policy=policy, rule="fully_known", given=given)
         c = known.counts()
         unl = int(unlabelled_cells(known, scene.objects).sum())
         return KnownSpaceSummary(int(np.prod(known.shape)), c["free"], c["occupied"], c["unknown"], unl, policy)
@@ -231,10 +254,23 @@ class KnownSpaceSession:
         out = np.concatenate(segs, axis=0)
         return out, float(np.linalg.norm(out[:, 1] - out[:, 0], axis=1).sum())
 
-    def _grid_for_locked(self, scene: Scene) -> PlanningGrid:
-        """The planning grid for ``scene`` with this session's known space and policy."""
+    def nothing_seen_locked(self, scene: Scene | None = None, known: Any = _CURRENT) -> bool:
+        """Whether the map is the console's own with nothing seen yet: made with ``empty_is_unseen``, no
+        known space (no capture), and no scene file spawned or loaded that still has objects (a hand-made
+        map). ``scene`` / ``known``: judge those instead of the session's (a change being made)."""
+        scene = self._scene if scene is None else scene
+        known = self._known if known is _CURRENT else known
+        return bool(self._empty_is_unseen and known is None and not (self._map_given and scene.objects))
+
+    def _grid_for_locked(self, scene: Scene, known: Any = _CURRENT) -> PlanningGrid:
+        """The planning grid for ``scene`` with this session's known space (or ``known``) and policy; on
+        the console's map with nothing seen yet (:meth:`nothing_seen_locked`) every cell is unknown (the
+        robot's own cells are opened by the route, as at any start)."""
+        known = self._known if known is _CURRENT else known
+        if self.nothing_seen_locked(scene, known):
+            known = empty_known(self._workspace)
         try:
-            return grid_for(scene, self._workspace, self._margin, self._known, self._plan_unknown)
+            return grid_for(scene, self._workspace, self._margin, known, self._plan_unknown)
         except GridError as exc:
             raise SessionError(f"cannot build the planning grid: {exc}") from None
 

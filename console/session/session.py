@@ -37,7 +37,7 @@ from pathlib import Path
 from typing import Any, Callable, Sequence
 
 from pipeline.scene import Scene
-from planner.grid import CostWeights, GridError, Workspace, build_grid
+from planner.grid import CostWeights, GridError, Workspace
 from planner.mission import Mission
 from planner.route import PlanResult, Route, path_points
 
@@ -80,6 +80,10 @@ class Session(SessionReads, Persistence, Undo, OperatorRules, KnownSpaceSession)
         margin: Robot radius [m]: cells this close to an obstacle are dangerous.
         weights: Aerial-Ground A* layer costs.
         autosave: Write ``session.json`` after every change.
+        empty_is_unseen: The console's rule for a robot in a room nobody has looked at: before the
+            first capture, a map with no scene file spawned or loaded is space no capture has seen
+            (planned as all unknown: :meth:`~console.session.known_space_state.KnownSpaceSession.nothing_seen`).
+            Without it (scripts, benches, hand-made maps) a map without known space is taken as fully known.
     """
 
     def __init__(
@@ -90,6 +94,7 @@ class Session(SessionReads, Persistence, Undo, OperatorRules, KnownSpaceSession)
         margin: float = 0.35,
         weights: CostWeights = CostWeights(),
         autosave: bool = True,
+        empty_is_unseen: bool = False,
     ) -> None:
         self.folder = Path(folder).expanduser().resolve()
         self.folder.mkdir(parents=True, exist_ok=True)
@@ -100,7 +105,11 @@ class Session(SessionReads, Persistence, Undo, OperatorRules, KnownSpaceSession)
         self._margin = margin
         self._weights = weights
         self._scene = Scene()
-        self._grid = build_grid(self._scene, workspace, margin)
+        self._known = None  # known space (console.session.known_space_state): None until the first capture
+        self._plan_unknown = "closed"
+        self._empty_is_unseen = bool(empty_is_unseen)
+        self._map_given = False  # a scene file was spawned or a map loaded (a hand-made map: fully known)
+        self._grid = self._grid_for_locked(self._scene)
         self._route = Route(self._grid, self._floor_point(start), weights)
         self._mission: Mission | None = None
         self._capture: CaptureRecord | None = None
@@ -114,9 +123,7 @@ class Session(SessionReads, Persistence, Undo, OperatorRules, KnownSpaceSession)
         self._restore_problems: list[str] = []
         self._outbox: list[Notice] = []  # notices raised under the lock, sent by the next _emit
         self._history = History()
-        self._known = None  # known space (console.session.known_space_state): None until the first capture
         self._run_start: Vec3 | None = None  # where the robot is during a run: the route start shown
-        self._plan_unknown = "closed"
 
     # --- observers -----------------------------------------------------------------------------
     def subscribe(self, listener: Listener) -> Callable[[], None]:
@@ -206,7 +213,7 @@ class Session(SessionReads, Persistence, Undo, OperatorRules, KnownSpaceSession)
                 why = goal_rules.zero_length(g, self._route, self._workspace)  # type: ignore[arg-type]
             if why is not None:
                 return PlanResult(False, why)
-            res = self._route.propose(g)
+            res = goal_rules.nothing_seen(self._route.propose(g), self.nothing_seen_locked())
             if res.ok:
                 self._save_locked()
         if res.ok:
@@ -287,6 +294,8 @@ class Session(SessionReads, Persistence, Undo, OperatorRules, KnownSpaceSession)
         """
         what = f" from {origin}" if origin else ""
         self.check_plausible(scene, f"refused{what}")
+        if not origin.startswith("capture "):
+            self._map_given = True  # a scene file or a script's scene: a hand-made map, taken as fully known
         key = origin.replace(" ", ":", 1) if origin.startswith("capture ") else ""  # one undo step with set_capture
         drop = set(replaces)
 
@@ -446,6 +455,18 @@ class Session(SessionReads, Persistence, Undo, OperatorRules, KnownSpaceSession)
     def _sync_start_locked(self) -> bool:
         """The route starts at the robot (rules in :mod:`console.session.operator_state`); True if it changed."""
         return self._follow_robot_locked()
+
+    def _apply_saved(self, saved: Any, where: str, remember: str | None) -> list[str]:
+        """A restored or loaded map with objects and no known space is a hand-made one (fully known)."""
+        with self._lock:
+            self._map_given = self._map_given or (saved.known is None and bool(saved.scene.objects))
+        return super()._apply_saved(saved, where, remember)
+
+    def _ready_locked(self, state: Any) -> Any:
+        """An undo step read back from ``history.json`` gets its grid under this session's rules."""
+        if state.grid is None:
+            state = replace(state, grid=self._grid_for_locked(state.scene, state.known))
+        return super()._ready_locked(state)
 
     def _floor_point(self, p: Sequence[float]) -> Vec3:
         return (float(p[0]), float(p[1]), self._workspace.floor)

@@ -149,7 +149,7 @@ def test_operator_maps_the_room_and_builds_a_mission(console: ConsoleApp, tmp_pa
     session = app.session
     assert session is not None and app.server is not None
     assert app.config.host == "127.0.0.1" and app.url.startswith("http://127.0.0.1:")
-    assert session.scene.objects == () and session.grid.counts()["occupied"] == 0  # starts unmapped
+    assert session.scene.objects == () and session.known_summary().rule == "nothing_seen"  # starts unmapped: unseen
 
     with sync_playwright() as pw:
         ctx = pw.chromium.launch_persistent_context(

@@ -13,6 +13,11 @@ from pathlib import Path
 from console.app import ConsoleApp, ConsoleConfig, wait_until
 from console.link.mavlink import MavlinkConfig
 from mav_emulator import ArduCopterEmulator, free_udp_port
+from pipeline.scene import Scene, SceneObject
+
+CRATE = SceneObject("crate-1", "cardboard_box", (4.3, 7.0, 0.25), (0.5, 0.5, 0.5))
+"""The operator's hand-made map (a scene file, taken as fully known): before any capture the console's
+own empty map is space no capture has seen, where no goal is planned."""
 
 
 def test_the_console_shows_an_unknown_then_known_then_stale_position(tmp_path: Path) -> None:
@@ -33,6 +38,7 @@ def test_the_console_shows_an_unknown_then_known_then_stale_position(tmp_path: P
                               and "FS_GCS_ENABLE is 0" in robot.status, 60), robot.status
             assert robot.twin_shown == "hidden"
             assert "no position estimate" in robot.status
+            session.spawn(Scene(objects=(CRATE,)), origin="file room.json")
             assert session.add_goal((2.5, 2.0, 0.0)).ok
             session.register()
             session.build_mission()
