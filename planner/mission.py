@@ -29,6 +29,7 @@ import numpy as np
 from pipeline.scene import write_text_atomic
 
 from planner.grid import CellState, PlanningGrid, Workspace
+from planner.landing_spot import landing_problem
 
 MISSION_VERSION = 1
 
@@ -244,13 +245,23 @@ def simplify(points: np.ndarray, tol: float = 1e-6) -> np.ndarray:
     return p[keep]
 
 
+def check_landing(grid: PlanningGrid, spot: tuple[float, float]) -> None:
+    """Raise :class:`MissionError` when the robot may not land at ``spot`` (world [m]; free ground under its
+    whole footprint: :func:`planner.landing_spot.landing_problem`, the one rule for every landing)."""
+    problem = landing_problem(grid, spot, clear=True)
+    if problem is not None:
+        raise MissionError(f"cannot land at ({spot[0]:.2f}, {spot[1]:.2f}): {problem}")
+
+
 def mission_from_cells(cells: np.ndarray, grid: PlanningGrid) -> Mission:
     """Split a path of grid cells (K x 3, start..goal) into mission segments.
 
     The path leaves the ground where a ground cell is followed by an air cell: that ground cell
     is the take-off spot and the first air cell's height the take-off target. It returns to the
     ground at the first ground cell after air: the landing spot. Take-off and landing spots must
-    be on free ground (not dangerous) and the column above them passable.
+    be on free ground (not dangerous) and the column above them passable; a landing spot also passes
+    :func:`check_landing` (the robot's whole footprint: no mapped object of any height, no obstacle cell,
+    no unseen floor).
     """
     cells = np.asarray(cells, dtype=np.int64).reshape(-1, 3)
     if len(cells) == 0:
@@ -267,6 +278,8 @@ def mission_from_cells(cells: np.ndarray, grid: PlanningGrid) -> Mission:
     def check_spot(i: int, what: str) -> None:
         st = grid.state_at(cells[i])
         x, y, _ = ground_pt(i)
+        if what == "landing":
+            check_landing(grid, (x, y))
         if st is not CellState.FREE:
             raise MissionError(f"{what} spot ({x:.2f}, {y:.2f}) is on {st.name.lower()} ground")
         above = (int(cells[i, 0]), int(cells[i, 1]), 1)

@@ -1,0 +1,209 @@
+"""Where the robot may land: one rule for every way the console chooses a landing spot.
+
+Land here (straight down), Land here during a search (the nearest seen-free floor), the search's move
+beside its target, Go look, a mission's landing and Return all land through this rule:
+:func:`landing_problem` for one spot, :func:`landing_mask` for every floor cell at once (the two agree on
+cell centres). Every mission the planner builds checks its landing spots with it
+(:func:`planner.mission.check_landing`).
+
+A spot ``(x, y)`` on the floor is fit for landing when the robot's whole **footprint** there -- the floor
+cells whose centre lies within ``robot.radius`` of ``(x, y)`` in plan, and the cell holding it --
+
+1. **has been seen** (with known space): no cell of the footprint's walking column (the floor up to the
+   body's height) is unknown (closed) or unseen (allowed). A fully known map is not checked, nor a
+   ``forced`` landing (critical battery: a forced landing beats a crash);
+2. **holds no mapped object, whatever its height**: no object's box comes within ``robot.radius`` of
+   ``(x, y)`` in plan while overlapping the body's height above the floor -- a 5 cm sports mat counts as
+   a 2 m cabinet does (the body touches both when it lands);
+3. **holds no obstacle cell**: no footprint column holds an unlabelled obstacle (a depth surface no mapped
+   object explains: an unmapped mat the simulator's exact depth saw), a mapped object's surface seen
+   outside its box, or lies under a floating object;
+4. and the planner does not close the spot's own floor cell for the robot's size (its configuration
+   space, measured to obstacle cells' cubes; not for ``forced`` landings, and not for the workspace's edge
+   band, which a straight descent comes no nearer to).
+
+``clear`` (choosing a new spot): the spot must also lie outside the danger band (the planner's free
+ground, where missions take off and land). World frame (z up) [m].
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Sequence
+
+import numpy as np
+from scipy import ndimage
+
+from planner.cspace import box_distance, object_distances
+from planner.grid import CellState, Closed, PlanningGrid
+
+OBSTACLE_CELLS = (Closed.UNLABELLED, Closed.SURFACE, Closed.BENEATH, Closed.OBJECT)
+"""What a footprint column may not hold (the ground layer's reason says what its walking column holds)."""
+
+_EDGE = getattr(Closed, "EDGE", None)  # the workspace's edge band: a straight descent comes no nearer to it
+
+_WORDS = {
+    Closed.UNLABELLED: "an unlabelled obstacle (a surface no mapped object explains)",
+    Closed.SURFACE: "the seen surface of a mapped object",
+    Closed.BENEATH: "the space under a floating object",
+    Closed.OBJECT: "a mapped object",
+}
+
+
+@dataclass(frozen=True)
+class LandingProblem:
+    """Why a spot is not fit for landing.
+
+    Attributes:
+        kind: ``outside``, ``unseen``, ``object`` (a mapped object within the radius), ``obstacle`` (an
+            obstacle cell in the footprint, or the spot closed for the robot's size) or ``danger``.
+        text: The operator's words.
+        owner: The object's id (``object``), or the id the planner names for the closed cell, or ``None``.
+    """
+
+    kind: str
+    text: str
+    owner: str | None = None
+
+    def __str__(self) -> str:
+        return self.text
+
+
+def _pt(x: float, y: float) -> str:
+    return f"({x:.2f}, {y:.2f})"
+
+
+def _has_known(grid: PlanningGrid) -> bool:
+    return grid.rule != "fully_known" and grid.reason is not None
+
+
+def _band(grid: PlanningGrid) -> tuple[float, float]:
+    """The walking body's height range above the floor [m]."""
+    floor = grid.workspace.floor
+    return floor, floor + grid.robot.height
+
+
+def _columns(grid: PlanningGrid) -> tuple[np.ndarray, np.ndarray]:
+    """``(unseen, obstacle)`` ``bool [nx, ny]``: floor columns not seen (closed unknown, or unseen with
+    unknown space allowed) and columns holding an obstacle cell (:data:`OBSTACLE_CELLS`)."""
+    shape = grid.state.shape[:2]
+    if grid.reason is None:
+        return np.zeros(shape, dtype=bool), np.zeros(shape, dtype=bool)
+    r0 = grid.reason[:, :, 0]
+    unseen = (r0 == Closed.UNKNOWN) if _has_known(grid) else np.zeros(shape, dtype=bool)
+    if grid.unseen is not None and _has_known(grid):
+        unseen = unseen | grid.unseen[:, :, 0]
+    return unseen, np.isin(r0, [int(c) for c in OBSTACLE_CELLS])
+
+
+def footprint(grid: PlanningGrid, point: Sequence[float]) -> np.ndarray:
+    """``bool [nx, ny]``: the floor cells under the robot's footprint at ``point`` (world [m]; x, y used):
+    those whose centre lies within ``robot.radius`` of it in plan, and the cell holding it (empty outside
+    the workspace)."""
+    ws = grid.workspace
+    x, y = float(point[0]), float(point[1])
+    xs, ys, _ = ws.axes()
+    foot = np.hypot(xs[:, None] - x, ys[None, :] - y) <= grid.robot.radius + 1e-9
+    cell = ws.cell_of((x, y, ws.floor))
+    if cell is None:
+        return np.zeros_like(foot)
+    foot[cell[0], cell[1]] = True
+    return foot
+
+
+def unseen_footprint(grid: PlanningGrid, point: Sequence[float]) -> bool:
+    """Whether any floor column under the robot's footprint at ``point`` (world [m]) has not been seen
+    (item 1 of the module's rule); ``False`` on a fully known map."""
+    if not _has_known(grid):
+        return False
+    unseen, _ = _columns(grid)
+    return bool(np.any(unseen & footprint(grid, point)))
+
+
+def _nearest_object(grid: PlanningGrid, x: float, y: float) -> tuple[object, float] | None:
+    """The mapped object (overlapping the body's height) nearest to ``(x, y)`` in plan within the
+    robot's radius, and its footprint distance [m]; ``None`` when none is."""
+    lo, hi = _band(grid)
+    best = None
+    p = np.array([[x, y, 0.0]])
+    for obj in grid.objects:
+        if obj.frame != "world":
+            continue
+        cz, h = float(obj.position[2]), float(obj.size[1])
+        if not (cz - h / 2 < hi and cz + h / 2 > lo):
+            continue
+        d = float(box_distance(obj, p, horizontal=True)[0])
+        if d <= grid.robot.radius + 1e-9 and (best is None or d < best[1]):
+            best = (obj, d)
+    return best
+
+
+def landing_problem(grid: PlanningGrid, point: Sequence[float], forced: bool = False,
+                    clear: bool = False) -> LandingProblem | None:
+    """Why the robot may not land at ``point`` (world [m]; x, y used) on ``grid``, or ``None`` (the
+    module's rule). ``forced``: a critical-battery landing (unseen floor and the planner's clearance do
+    not stop it; objects and obstacle cells in the footprint do). ``clear``: also outside the danger band."""
+    ws = grid.workspace
+    x, y = float(point[0]), float(point[1])
+    if not (math.isfinite(x) and math.isfinite(y)):
+        return LandingProblem("outside", f"the landing spot ({x}, {y}) is not a finite point")
+    cell = ws.cell_of((x, y, ws.floor))
+    if cell is None:
+        return LandingProblem("outside", f"the landing spot {_pt(x, y)} is outside the workspace")
+    foot = footprint(grid, (x, y))
+    unseen, obstacle = _columns(grid)
+    if not forced and np.any(unseen & foot):
+        return LandingProblem("unseen", f"the floor under the robot's footprint at {_pt(x, y)} has not been seen")
+    near = _nearest_object(grid, x, y)
+    if near is not None:
+        obj, d = near
+        name = f"{obj.label.replace('_', ' ')} '{obj.id}'"  # type: ignore[attr-defined]
+        where = "under" if d <= 1e-9 else f"{d:.2f} m from"
+        return LandingProblem("object", f"{name} is {where} the landing spot {_pt(x, y)}; the robot needs "
+                              f"{grid.robot.radius:.2f} m around it (its radius), whatever the object's height",
+                              obj.id)  # type: ignore[attr-defined]
+    if np.any(obstacle & foot):
+        i, j = np.argwhere(obstacle & foot)[0]
+        what = _WORDS.get(Closed(int(grid.reason[i, j, 0])), "an obstacle")  # type: ignore[index]
+        c = ws.centers(np.array([[i, j, 0]]))[0]
+        return LandingProblem("obstacle", f"{what} at {_pt(c[0], c[1])} is under the robot's footprint at "
+                              f"{_pt(x, y)}")
+    k0 = (cell[0], cell[1], 0)
+    if not forced and grid.state_at(k0) is CellState.OCCUPIED and grid.reason_at(k0) != _EDGE:
+        owner = grid.owner_of(k0)
+        return LandingProblem("obstacle", f"the landing spot {_pt(x, y)} is within the robot's radius of "
+                              f"{owner or 'an obstacle'}", owner)
+    if clear and grid.state_at(k0) is not CellState.FREE:
+        return LandingProblem("danger", f"the landing spot {_pt(x, y)} is in the danger band beside an obstacle "
+                              "(free ground is needed to take off and land)")
+    return None
+
+
+def landing_mask(grid: PlanningGrid, forced: bool = False, clear: bool = False) -> np.ndarray:
+    """``bool [nx, ny]``: the floor cells whose centre is fit for landing (:func:`landing_problem` is
+    ``None`` there), computed for the whole floor at once."""
+    ws = grid.workspace
+    r = max(0, int(math.floor(grid.robot.radius / ws.resolution + 1e-9)))
+    ii, jj = np.mgrid[-r:r + 1, -r:r + 1]
+    disk = np.hypot(ii, jj) * ws.resolution <= grid.robot.radius + 1e-9  # cell centres within the radius
+    unseen, obstacle = _columns(grid)
+    bad = ndimage.binary_dilation(obstacle, structure=disk) if obstacle.any() else obstacle.copy()
+    if not forced and unseen.any():
+        bad |= ndimage.binary_dilation(unseen, structure=disk)
+    objs = [o for o in grid.objects if o.frame == "world"]
+    if objs:
+        d2, _ = object_distances(objs, ws.axes(), grid.robot.radius, z_band=_band(grid))
+        bad |= d2 <= grid.robot.radius + 1e-9
+    ground = grid.state[:, :, 0]
+    if not forced:
+        closed = ground == CellState.OCCUPIED
+        if _EDGE is not None and grid.reason is not None:
+            closed &= grid.reason[:, :, 0] != _EDGE
+        bad |= closed
+    if clear:
+        bad |= ground != CellState.FREE
+    return ~bad
+
+
+__all__ = ["LandingProblem", "OBSTACLE_CELLS", "footprint", "landing_mask", "landing_problem", "unseen_footprint"]
