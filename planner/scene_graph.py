@@ -35,7 +35,9 @@ Deterministic rules and their thresholds (all module constants):
   :data:`LINE_WIDTH` of a straight line) or ``cluster``. A line ``crosses the workspace`` when both
   ends are within :data:`WALL_GAP` of opposite workspace walls. Relations between members of one
   group are left out; relations of an outside object to several members are stated once, against
-  the group (left / right are not stated for groups).
+  the group (left / right are not stated for groups). A group's id is ``group-`` and its first member
+  in natural order (:func:`group_id`: ``group-cardboard_box-3``), so it keeps its name from capture to
+  capture while that member stays.
 - **Reachability** (with a robot pose and a grid): walk, fly or none, by
   :class:`planner.object_goal.Reachability` (the Aerial-Ground A*'s own connectivity and costs; the
   path itself, its cost and landing spot, is planned for the :data:`PLAN_MAX` nearest objects only);
@@ -225,8 +227,20 @@ def _groups(objs: Sequence[SceneObject], gaps: dict[tuple[int, int], float], sup
         mem = members[root]
         if len(mem) < GROUP_MIN:
             continue
-        out.append(_describe_group(f"group-{len(out) + 1}", [objs[n] for n in mem], grid))
+        out.append(_describe_group(group_id([objs[n].id for n in mem]), [objs[n] for n in mem], grid))
     return out
+
+
+def group_id(members: Sequence[str]) -> str:
+    """A group's id: ``group-`` and its first member id in natural order (``group-cardboard_box-3``).
+
+    Stable while that member stays in the group: the map fusion never renames an object and gives a new
+    one the next free number of its class, so a box mapped later joins as a later member; the name
+    depends on the map alone, so a restart (the map saved and loaded) keeps it. It changes only when that
+    member leaves the group (deleted, moved away, merged) or two groups join (the joint group takes the
+    first member of both).
+    """
+    return "group-" + min(members, key=natural_key)
 
 
 def _describe_group(gid: str, mem: list[SceneObject], grid: PlanningGrid | None) -> dict[str, Any]:
@@ -429,5 +443,5 @@ def build_scene_graph(scene: Scene, robot: Sequence[float] | None = None, grid: 
     }
 
 
-__all__ = ["GRAPH_SCHEMA_VERSION", "PLACEMENTS", "RobotPose", "SceneGraphError", "build_scene_graph", "check_robot",
+__all__ = ["GRAPH_SCHEMA_VERSION", "PLACEMENTS", "RobotPose", "SceneGraphError", "build_scene_graph", "check_robot", "group_id",
            "direction", "placement", "placement_text"]

@@ -82,7 +82,9 @@ _GROUP = {
     "required": ["id", "kind", "label", "members", "columns", "centre", "length", "width", "height", "axis_deg",
                  "crosses_workspace"],
     "properties": {
-        "id": {"type": "string", "pattern": "^group-[0-9]+$"},
+        "id": {"type": "string", "pattern": "^group-.+$",
+               "description": "'group-' and the first member id in natural order (group-1 in graphs written before "
+                              "group names were kept from capture to capture)"},
         "kind": {"enum": ["line", "stack", "cluster"]},
         "label": {"type": "string"},
         "members": {"type": "array", "items": _ID, "minItems": 2},
@@ -160,7 +162,8 @@ def _version_2() -> dict[str, Any]:
 
 
 SCENE_GRAPH_SCHEMA: dict[str, Any] = _version_2()
-"""The current schema (version 2); subjects and objects of relations are object ids or group ids (``group-N``)."""
+"""The current schema (version 2); subjects and objects of relations are object ids or group ids
+(``group-`` and the group's first member id, e.g. ``group-cardboard_box-3``; ``group-N`` in older graphs)."""
 
 
 def schema_for(graph: dict[str, Any]) -> dict[str, Any]:

@@ -89,13 +89,13 @@ def test_dog_behind_a_line_of_boxes_as_seen_from_the_robot() -> None:
     assert dog["visibility"] == "hidden" and dog["from_robot"]["direction"] == "ahead"
     assert dog["from_robot"]["distance"] == pytest.approx(4.0, abs=0.01)
     assert dog["reach"]["mode"] == "walk"  # the line is short: walk around it
-    assert "hidden behind the line of 5 cardboard boxes (group-1)" in summarize(g)
+    assert "hidden behind the line of 5 cardboard boxes (group-box-0)" in summarize(g)
 
 
 def test_seen_from_the_other_side_the_dog_is_in_front_of_the_line() -> None:
     g = _graph(_line_and_dog(), robot=(2.5, 7.0, 0.0, -math.pi / 2))
     rels = _rels(g)
-    assert ("dog", "in_front_of", "group-1") in rels and ("dog", "behind", "group-1") not in rels
+    assert ("dog", "in_front_of", "group-box-0") in rels and ("dog", "behind", "group-box-0") not in rels
     assert _o(g, "dog")["visibility"] == "visible"
 
 
