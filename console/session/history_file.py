@@ -17,6 +17,8 @@ from __future__ import annotations
 
 import json
 import logging
+import shutil
+import time
 from pathlib import Path
 from typing import Any, Sequence
 
@@ -24,14 +26,13 @@ from pipeline.scene import scene_to_dict, write_text_atomic
 from planner.grid import Workspace
 
 from console.session.history import SceneState
+from console.session.history_schema import HISTORY_KIND, HISTORY_VERSION, outline_errors, step_errors
 from console.session.session_parse import SESSION_VERSION, parse_saved
 from console.session.session_types import SessionError
 
 log = logging.getLogger(__name__)
 
 HISTORY_FILE = "history.json"
-HISTORY_KIND = "morphonavi-history"
-HISTORY_VERSION = 1
 MAX_HISTORY_BYTES = 40 * 1024 * 1024
 """The history file stays under this size [bytes]: older undo states are left out of it (a map of
 10 000 objects is about 10 MB a state; the paper's room with its known space about 0.1 MB)."""
@@ -117,39 +118,64 @@ class HistoryWriter:
         write_text_atomic(path, self.text(undo, redo, workspace, margin))
 
 
+def set_aside(path: Path, move: bool) -> str:
+    """Move (or copy) a bad history file to ``history.json.unreadable-<time>`` beside it; returns what the
+    operator is told (``kept aside as history.json.unreadable-...``, ``a copy kept as ...``, or why not)."""
+    stamp = time.strftime("%Y%m%d-%H%M%S")
+    kept, n = path.with_name(f"{path.name}.unreadable-{stamp}"), 1
+    while kept.exists():
+        n += 1
+        kept = path.with_name(f"{path.name}.unreadable-{stamp}-{n}")
+    try:
+        if move:
+            path.replace(kept)
+        else:
+            shutil.copy2(path, kept)
+    except OSError as exc:
+        return f"not kept aside: {(exc.strerror or str(exc)).lower()}"
+    return f"{'kept aside' if move else 'a copy kept'} as {kept.name}"
+
+
 def read_history_file(path: Path, workspace: Workspace) -> tuple[list[SceneState], list[SceneState], list[str]]:
     """The undo and redo states saved in ``path`` (oldest first) and what could not be read back.
 
-    A missing file gives empty stacks and no problem. A file that is not a history (or unreadable) gives
-    empty stacks and the reason; a state that fails the session checks is dropped with the one before it
-    (an undo goes back one step at a time, so the older ones stay reachable only through it).
+    A missing file gives empty stacks and no problem. The file is checked against its schema
+    (:data:`console.session.history_schema.HISTORY_SCHEMA`), then every state through the session file's
+    checks. A file that is unreadable, not a history, or wrong in its outline is moved aside
+    (``history.json.unreadable-<time>``): empty stacks and the reason naming the field. A step that fails
+    is dropped with the ones before it (an undo goes back one step at a time, so the older ones stay
+    reachable only through it; a bad redo step drops the redo stack), and the file is first copied aside.
+    Never raises for a bad file.
     """
     if not path.exists():
         return [], [], []
     from pipeline.file_kind import MAX_BYTES
 
+    def unusable(why: str) -> tuple[list[SceneState], list[SceneState], list[str]]:
+        return [], [], [f"{path.name} {why}: the undo history starts empty ({set_aside(path, move=True)})"]
+
     try:
         if path.stat().st_size > MAX_BYTES["session"] + MAX_HISTORY_BYTES:
-            return [], [], [f"{path.name} is too large to read: the undo history starts empty"]
+            return unusable("is too large to read")
         data = json.loads(path.read_text(encoding="utf-8"))
-    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
-        return [], [], [f"{path.name} could not be read ({exc}): the undo history starts empty"]
+    except (OSError, UnicodeDecodeError, ValueError, RecursionError) as exc:
+        return unusable(f"could not be read ({exc})")
     if not isinstance(data, dict) or data.get("kind") != HISTORY_KIND or data.get("version") != HISTORY_VERSION:
-        return [], [], [f"{path.name} is not a MorphoNavi undo history (version {HISTORY_VERSION}): "
-                        "the undo history starts empty"]
-    spaces = data.get("known_spaces")
-    spaces = spaces if isinstance(spaces, dict) else {}
+        return unusable(f"is not a MorphoNavi undo history (version {HISTORY_VERSION})")
+    outline = outline_errors(data)
+    if outline:
+        return unusable(f"is not a valid undo history: {outline[0]}")
+    spaces = data.get("known_spaces") or {}
     problems: list[str] = []
     known_cache: dict[str, Any] = {}
 
     def states(name: str) -> list[SceneState]:
-        raw = data.get(name)
-        if not isinstance(raw, list):
-            problems.append(f"{path.name}: {name}: must be a list: none restored")
-            return []
         out: list[SceneState] = []
-        for i, entry in enumerate(raw):
+        for i, entry in enumerate(data[name]):
             try:
+                errors = step_errors(entry, f"{path.name}: {name}[{i}]", limit=1)
+                if errors:
+                    raise SessionError(errors[0])
                 out.append(_state_from(entry, spaces, workspace, known_cache, f"{path.name}: {name}[{i}]"))
             except SessionError as exc:
                 problems.append(f"{exc}: the undo history before it was dropped" if name == "undo"
@@ -159,7 +185,10 @@ def read_history_file(path: Path, workspace: Workspace) -> tuple[list[SceneState
                     return []
         return out
 
-    return states("undo"), states("redo"), problems
+    undo, redo = states("undo"), states("redo")
+    if problems:
+        problems[-1] += f" ({set_aside(path, move=False)})"
+    return undo, redo, problems
 
 
 def _state_from(entry: Any, spaces: dict[str, Any], workspace: Workspace, known_cache: dict[str, Any],

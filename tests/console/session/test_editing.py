@@ -143,10 +143,10 @@ def test_the_saved_history_is_bounded_and_a_bad_file_starts_it_empty_with_the_re
     saved = json.loads((s.folder / HISTORY_FILE).read_text())
     assert len(saved["undo"]) == HISTORY_DEPTH and saved["redo"] == []
     assert saved["known_spaces"] == {}  # no capture: no known space in any state
-    (s.folder / HISTORY_FILE).write_text('{"kind": "morphonavi-history", "version": 1, "undo": [{"label": "x"}]}')
+    (s.folder / HISTORY_FILE).write_text('{"kind": "morphonavi-history", "version": 1, "undo": [{"label": "x"}], "redo": []}')
     again = Session(tmp_path / "s", start=START)
     again.restore_last()
-    assert again.undo_label is None and any("undo[0].state: must be an object" in p for p in again.restore_problems)
+    assert again.undo_label is None and any("undo[0].state: is required" in p for p in again.restore_problems)
     assert len(again.scene.objects) == 1  # the map itself is restored
     (s.folder / HISTORY_FILE).write_text("not json")
     third = Session(tmp_path / "s", start=START)
