@@ -3,7 +3,8 @@
 Reads :attr:`console.session.session.Session.known_space` (world frame, z up [m]); pure, no I/O.
 The *frontier* is the seen-free floor next to floor that no capture has seen: where to go or look
 next (the same idea as a frontier-based explorer's). Before the first capture there is no known
-space and the map is taken as fully known (as the planner does).
+space: ``known`` is false and ``text`` says which rule holds (the console's own map: nothing seen yet,
+every cell unknown; a map of scene files: taken as fully known, as the planner does).
 """
 
 from __future__ import annotations
