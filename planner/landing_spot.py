@@ -38,8 +38,9 @@ from scipy import ndimage
 from planner.cspace import box_distance, object_distances
 from planner.grid import CellState, Closed, PlanningGrid
 
-OBSTACLE_CELLS = (Closed.UNLABELLED, Closed.SURFACE, Closed.BENEATH, Closed.OBJECT)
-"""What a footprint column may not hold (the ground layer's reason says what its walking column holds)."""
+OBSTACLE_CELLS = (Closed.UNLABELLED, Closed.SURFACE, Closed.BENEATH)
+"""What a footprint column may not hold (the ground layer's reason says what its walking column holds);
+mapped objects are measured by their exact boxes instead (item 2), not by the cells they overlap."""
 
 _EDGE = getattr(Closed, "EDGE", None)  # the workspace's edge band: a straight descent comes no nearer to it
 
@@ -47,7 +48,6 @@ _WORDS = {
     Closed.UNLABELLED: "an unlabelled obstacle (a surface no mapped object explains)",
     Closed.SURFACE: "the seen surface of a mapped object",
     Closed.BENEATH: "the space under a floating object",
-    Closed.OBJECT: "a mapped object",
 }
 
 
@@ -174,6 +174,9 @@ def landing_problem(grid: PlanningGrid, point: Sequence[float], forced: bool = F
         owner = grid.owner_of(k0)
         return LandingProblem("obstacle", f"the landing spot {_pt(x, y)} is within the robot's radius of "
                               f"{owner or 'an obstacle'}", owner)
+    if clear and grid.state_at(k0) is CellState.OCCUPIED:  # only the workspace's edge band reaches here
+        return LandingProblem("obstacle", f"the landing spot {_pt(x, y)} is within the robot's radius of the "
+                              "workspace's edge")
     if clear and grid.state_at(k0) is not CellState.FREE:
         return LandingProblem("danger", f"the landing spot {_pt(x, y)} is in the danger band beside an obstacle "
                               "(free ground is needed to take off and land)")

@@ -48,7 +48,10 @@ import numpy as np
 
 from pipeline.scene import Scene
 from planner.grid import CellState, Closed, CostWeights, PlanningGrid, Workspace
-from planner.mission import Mission, MissionError, MissionSegment, SegmentKind, mission_from_cells, simplify
+from planner.landing_spot import landing_problem, unseen_footprint
+from planner.mission import (
+    Mission, MissionError, MissionSegment, SegmentKind, check_landing, mission_from_cells, simplify,
+)
 
 from console.session import mission_rules
 from console.session.session_types import RobotSnapshot, RunStatus, Vec3, fmt_point
@@ -307,24 +310,9 @@ def vehicle_commands(robot: RobotSnapshot | None, run: RunStatus, ws: Workspace,
 
 
 def unseen_floor(point: Sequence[float], grid: PlanningGrid) -> bool:
-    """Whether any floor cell under the robot's footprint at ``point`` (world [m]; x, y used) is not
-    seen free in the known space: closed as :attr:`Closed.UNKNOWN` (unknown space closed) or marked
-    unseen (unknown space allowed). The footprint: the floor cells whose centre lies within
-    ``robot.radius`` of the point horizontally, and the cell holding it. ``False`` on a fully known grid."""
-    if grid.rule == "fully_known" or grid.reason is None:
-        return False
-    ws = grid.workspace
-    x, y = float(point[0]), float(point[1])
-    cell = ws.cell_of((x, y, ws.floor))
-    if cell is None:
-        return False
-    xs, ys, _ = ws.axes()
-    foot = np.hypot(xs[:, None] - x, ys[None, :] - y) <= grid.robot.radius + 1e-9
-    foot[cell[0], cell[1]] = True
-    bad = grid.reason[:, :, 0] == Closed.UNKNOWN
-    if grid.unseen is not None:
-        bad = bad | grid.unseen[:, :, 0]
-    return bool(np.any(bad & foot))
+    """Whether any floor column under the robot's footprint at ``point`` (world [m]; x, y used) is not
+    seen free (the landing rule's first item: :func:`planner.landing_spot.unseen_footprint`)."""
+    return unseen_footprint(grid, point)
 
 
 def unseen_floor_blocker(point: Sequence[float], grid: PlanningGrid) -> str | None:
@@ -360,7 +348,8 @@ def landing_blocker(robot: RobotSnapshot, grid: PlanningGrid, forced: bool = Fal
                             "look down there first, or Return")
             return (f"{owner or 'an obstacle'} is below the robot at {fmt_point((x, y))}: "
                     "use Return, or plan a goal on free floor")
-    return None
+    why = landing_problem(grid, (x, y), forced)  # the whole footprint on the floor: the one landing rule
+    return None if why is None or why.kind == "unseen" else f"{why}: use Return, or plan a goal on free floor"
 
 
 def land_here_mission(robot: RobotSnapshot, ws: Workspace, mission_id: str) -> Mission:
@@ -437,9 +426,7 @@ def mission_from_path(cells: np.ndarray, grid: PlanningGrid, mission_id: str | N
     segs: list[MissionSegment] = []
     if k < len(cells):
         spot = (float(centres[k, 0]), float(centres[k, 1]), ws.floor)
-        st = grid.state_at(cells[k])
-        if st is not CellState.FREE:
-            raise MissionError(f"landing spot {fmt_point(spot[:2])} is on {st.name.lower()} ground")
+        check_landing(grid, spot[:2])  # the one landing rule (free ground under the whole footprint)
         air.append((spot[0], spot[1], air[-1][2]))
     fly = simplify(np.array(air))
     if len(fly) > 1:

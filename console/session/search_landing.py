@@ -3,10 +3,11 @@
 Outside a search, Land here lands straight down and is off over floor the known space has not seen
 free (:func:`console.session.operator_state.unseen_floor_blocker`). During a search the robot is
 often paused over floor no capture has seen (hovering behind a line of boxes, looking ahead), so
-Land here there *lands where it can*: it flies to the nearest floor spot seen free (every floor
-cell under the robot's footprint seen free and the spot free for the robot's size) and lands on it,
-over seen-free space only (the planner's Aerial-Ground A* with unknown space closed). When no such
-spot can be reached, it is refused with the reason.
+Land here there *lands where it can*: it flies to the nearest floor spot fit for landing (the one
+landing rule, :mod:`planner.landing_spot`: under the robot's whole footprint no mapped object of any
+height, no obstacle cell, no unseen floor; and free ground for its size) and lands on it, over
+seen-free space only (the planner's Aerial-Ground A* with unknown space closed). When no such spot
+can be reached, it is refused with the reason.
 
 Pure functions over the planning grid; the session calls them under its lock. World frame (z up),
 metres.
@@ -14,13 +15,12 @@ metres.
 
 from __future__ import annotations
 
-import math
 from typing import Any, Mapping, Sequence
 
 import numpy as np
-from scipy import ndimage
 
-from planner.grid import CellState, Closed, PlanningGrid
+from planner.grid import PlanningGrid
+from planner.landing_spot import landing_mask
 from planner.mission import Mission, MissionError
 
 from console.session import operator_state as rules
@@ -32,20 +32,13 @@ SPOTS_TRIED = 8
 
 
 def seen_free_floor(grid: PlanningGrid) -> np.ndarray | None:
-    """``bool [nx, ny]``: floor cells where the robot may land: free for its size and every floor cell
-    under its footprint (its radius around the cell centre) seen free. ``None`` on a fully known grid
-    (no known space: landing is not limited by what was seen)."""
+    """``bool [nx, ny]``: floor cells where the robot may land (:func:`planner.landing_spot.landing_mask`
+    with free ground: every floor cell under its footprint seen free, no mapped object of any height and
+    no obstacle cell within its radius, outside the danger band). ``None`` on a fully known grid (no
+    known space: landing is not limited by what was seen)."""
     if grid.rule == "fully_known" or grid.reason is None:
         return None
-    ws = grid.workspace
-    bad = grid.reason[:, :, 0] == Closed.UNKNOWN
-    if grid.unseen is not None:
-        bad = bad | grid.unseen[:, :, 0]
-    r = max(0, int(math.floor(grid.robot.radius / ws.resolution + 1e-9)))
-    ii, jj = np.mgrid[-r:r + 1, -r:r + 1]
-    disk = np.hypot(ii, jj) * ws.resolution <= grid.robot.radius + 1e-9  # cell centres within the radius
-    near_bad = ndimage.binary_dilation(bad, structure=disk) if bad.any() else bad
-    return (grid.state[:, :, 0] == CellState.FREE) & ~near_bad
+    return landing_mask(grid, clear=True)
 
 
 def nearest_landing_spots(grid: PlanningGrid, point: Sequence[float], limit: int = SPOTS_TRIED) -> list[tuple[float, float, float]]:
