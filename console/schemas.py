@@ -8,7 +8,8 @@ bad field, exit 1 when there is one). The schemas themselves live beside the cod
 - ``mission``: :data:`planner.mission_schema.MISSION_SCHEMA` (``plan --out``, the console's missions);
 - ``session``: :data:`console.session.session_schema.SESSION_SCHEMA` (the console's ``session.json``);
 - ``camera``: :data:`pipeline.camera.camera_schema.CAMERA_SCHEMA` (``camera.toml``, as parsed);
-- ``scene_graph``: :data:`planner.scene_graph_schema.SCENE_GRAPH_SCHEMA` (``describe --json``).
+- ``scene_graph``: :data:`planner.scene_graph_schema.SCENE_GRAPH_SCHEMA` (``describe --json``);
+- ``search_result``: :data:`console.session.search_result_schema.SEARCH_RESULT_SCHEMA` (``search --out``).
 """
 
 from __future__ import annotations
@@ -24,6 +25,7 @@ from pipeline.scene_schema import SCENE_SCHEMA
 from planner.mission_schema import MISSION_SCHEMA
 from planner.scene_graph_schema import SCENE_GRAPH_SCHEMA
 
+from console.session.search_result_schema import SEARCH_RESULT_SCHEMA
 from console.session.session_schema import SESSION_SCHEMA
 
 if sys.version_info >= (3, 11):
@@ -37,6 +39,7 @@ SCHEMAS: dict[str, dict[str, Any]] = {
     "session": SESSION_SCHEMA,
     "camera": CAMERA_SCHEMA,
     "scene_graph": SCENE_GRAPH_SCHEMA,
+    "search_result": SEARCH_RESULT_SCHEMA,
 }
 """Published schemas by file name stem (``docs/schemas/<name>.schema.json``)."""
 

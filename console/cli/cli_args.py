@@ -7,6 +7,7 @@ Values are world frame (z up) [m]; a bad value is an argparse error naming the o
 from __future__ import annotations
 
 import argparse
+import math
 from pathlib import Path
 from typing import Callable
 
@@ -18,8 +19,8 @@ def _numbers(option: str, counts: tuple[int, ...], form: str) -> Callable[[str],
     def parse(text: str) -> list[float]:
         try:
             return parse_numbers(text, option, counts, form)
-        except ValueListError as exc:
-            raise argparse.ArgumentTypeError(str(exc)) from None
+        except ValueListError as exc:  # argparse names the option itself ("argument --start: ...")
+            raise argparse.ArgumentTypeError(str(exc).removeprefix(f"{option}: ")) from None
 
     parse.__name__ = form  # argparse names the type in some messages
     return parse
@@ -38,20 +39,36 @@ def _vec3(option: str) -> Callable[[str], tuple[float, float, float]]:
 def _bounds(text: str) -> tuple[tuple[float, float, float], tuple[float, float, float]]:
     v = _numbers("--bounds", (6,), "xmin,ymin,zmin,xmax,ymax,zmax in metres")(text)
     if not (v[0] < v[3] and v[1] < v[4] and v[2] < v[5]):
-        raise argparse.ArgumentTypeError(f"--bounds: every minimum must be below its maximum, got {text!r}")
+        raise argparse.ArgumentTypeError(f"every minimum must be below its maximum, got {text!r}")
     return (v[0], v[1], v[2]), (v[3], v[4], v[5])
+
+
+def _positive(unit: str = "") -> Callable[[str], float]:
+    """An argparse ``type``: a finite number > 0 (argparse names the option in its message)."""
+
+    def positive(text: str) -> float:
+        try:
+            v = float(text)
+        except ValueError:
+            v = math.nan
+        if not (math.isfinite(v) and v > 0):
+            raise argparse.ArgumentTypeError(f"must be a number > 0{unit}, got {text}")
+        return v
+
+    positive.__name__ = "positive number"
+    return positive
 
 
 def _add_planner_args(p: argparse.ArgumentParser) -> None:
     g = p.add_argument_group("grid and costs (world frame, metres)")
     g.add_argument("--bounds", type=_bounds, default=((0.0, 0.0, 0.0), (5.0, 8.0, 3.0)),
                    help="workspace 'xmin,ymin,zmin,xmax,ymax,zmax' (default: the paper's 5 x 8 x 3 m room)")
-    g.add_argument("--resolution", type=float, default=0.25, help="cell size [m] (default 0.25)")
+    g.add_argument("--resolution", type=_positive(" [m]"), default=0.25, help="cell size [m] (default 0.25)")
     g.add_argument("--margin", type=float, default=0.35, help="robot radius: dangerous margin [m] (default 0.35)")
-    g.add_argument("--w-ground", type=float, default=1.0, help="ground layer cost per metre")
-    g.add_argument("--w-takeoff", type=float, default=12.0, help="first air layer (take-off/landing) cost per metre")
-    g.add_argument("--w-flight", type=float, default=3.0, help="higher layers cost per metre")
-    g.add_argument("--w-danger", type=float, default=5.0, help="multiplier for dangerous cells")
+    g.add_argument("--w-ground", type=_positive(), default=1.0, help="ground layer cost per metre")
+    g.add_argument("--w-takeoff", type=_positive(), default=12.0, help="first air layer (take-off/landing) cost per metre")
+    g.add_argument("--w-flight", type=_positive(), default=3.0, help="higher layers cost per metre")
+    g.add_argument("--w-danger", type=_positive(), default=5.0, help="multiplier for dangerous cells")
 
 
 def package_version() -> str:

@@ -3,31 +3,26 @@
 Prints each step of the search (:class:`console.session.search.SearchJob`) and writes the result as
 JSON (``--out``): found, target id, final position, distance to the target, path length, captures,
 time and the reason it ended. Perception is the simulator's ground truth (its rendered depth for the
-known space). Registered by :mod:`console.cli.morphonavi`.
+known space). The options and their checks are in :mod:`console.cli.search_args`. Registered by
+:mod:`console.cli.morphonavi`.
 """
 
 from __future__ import annotations
 
 import argparse
-import dataclasses
-import math
-import sys
 import tempfile
-import time
 from pathlib import Path
 from typing import Any
 
-from console.cli.errors import CliError
-from console.session.search import target_height
-from console.session.operator_state import BATTERY_LOW
-from console.session.search_types import BATTERY_RESERVE
+from console.session.search_types import target_height
 
 
 class HeadlessRig:
     """A simulated robot, a session, capture & map (ground truth), the mission runner and a search,
     wired as the console wires them (the link's states reach the session)."""
 
-    def __init__(self, world: Any, folder: Path, time_scale: float = 8.0, perception: str = "exact") -> None:
+    def __init__(self, world: Any, folder: Path, time_scale: float = 8.0, perception: str = "exact",
+                 seed: int | None = None) -> None:
         from console.link.sim import SimRobot
         from console.link.sim_config import SimConfig
         from console.session.mapping_job import MappingJob, simulator_perceiver
@@ -46,7 +41,14 @@ class HeadlessRig:
         st = self.robot.latest_state()
         if st is not None:
             self.session.set_robot(robot_snapshot(st))
-        self.mapping = MappingJob(self.session, self.robot.capture, simulator_perceiver(perception))
+        if perception == "noisy" and seed is not None:  # a repeatable draw of the perception noise
+            from console.link.sim_perception_noise import noisy_bundle_for
+            from console.session.mapping_job import NOISY_LABEL, MapperPerceiver
+
+            perceiver: Any = MapperPerceiver(NOISY_LABEL, noisy_bundle_for(seed=seed))
+        else:
+            perceiver = simulator_perceiver(perception)
+        self.mapping = MappingJob(self.session, self.robot.capture, perceiver)
         self.runner = make_runner(self.robot, self.session)
         self.search = SearchJob(self.session, self.robot, self.mapping, self.runner)
         from console.session.vehicle_commands import VehicleCommands
@@ -63,29 +65,15 @@ class HeadlessRig:
 
 
 def cmd_search(args: argparse.Namespace) -> int:
-    from console.link.world_file import WorldError, load_world, paper_world
-    from console.session.search import SearchConfig
-    from console.session.session import JOB, SessionError
+    from console.cli.outputs import write_output
+    from console.cli.search_args import search_request
+    from console.session.session import JOB
 
-    try:
-        world = load_world(args.world) if args.world is not None else paper_world()
-    except (WorldError, OSError) as exc:
-        raise CliError(f"--world {exc}") from None
-    out = Path(args.out) if args.out else None
-    if out is not None and (out.is_dir() or not out.parent.is_dir()):
-        raise CliError(f"--out {out}: must be a file name in an existing folder")
-    pct = args.battery_reserve
-    if not (math.isfinite(pct) and 100 * BATTERY_LOW <= pct < 100):
-        raise CliError(f"--battery-reserve: must be within {100 * BATTERY_LOW:.0f}..100 [%] (below "
-                       f"{100 * BATTERY_LOW:.0f} % the console refuses new moves), got {pct:g}")
-    try:
-        cfg = SearchConfig(args.target, mode="auto", max_captures=args.max_captures, max_time=args.max_time,
-                           target_height=target_height(args.target), min_battery=args.battery_reserve / 100.0)
-    except SessionError as exc:
-        raise CliError(str(exc)) from None
+    req = search_request(args)  # every option checked before the simulator starts
+    world, cfg, out = req.world, req.config, req.out
     with tempfile.TemporaryDirectory(prefix="morphonavi-search-") as tmp:
-        rig = HeadlessRig(world, Path(tmp) / "session", time_scale=args.time_scale,
-                          perception=getattr(args, "perception", "exact"))
+        rig = HeadlessRig(world, Path(tmp) / "session", time_scale=req.time_scale, perception=req.perception,
+                          seed=req.seed)
         printed = [0]
 
         def show(topic: str, _payload: Any) -> None:
@@ -98,9 +86,10 @@ def cmd_search(args: argparse.Namespace) -> int:
 
         rig.session.subscribe(show)
         try:
-            print(f"searching the simulator's room '{world.name}' for {args.target!r} "
-                  f"({'noisy ' if getattr(args, 'perception', 'exact') == 'noisy' else ''}ground-truth perception, "
-                  f"time x{args.time_scale:g})", flush=True)
+            seed = f", noise seed {req.seed}" if req.seed is not None else ""
+            print(f"searching the simulator's room '{world.name}' for {cfg.target!r} "
+                  f"({'noisy ' if req.perception == 'noisy' else ''}ground-truth perception{seed}, "
+                  f"time x{req.time_scale:g})", flush=True)
             rig.search.start(cfg)
             while not rig.search.wait(0.5):
                 pass
@@ -118,33 +107,20 @@ def cmd_search(args: argparse.Namespace) -> int:
     print(f"{'FOUND' if result.found else 'NOT FOUND'}: {result.reason}; target {result.target_id or '-'} ({d}); "
           f"{result.captures} captures, {result.path_length:.1f} m travelled, {result.time:.0f} s")
     if out is not None:
-        data = dataclasses.asdict(result)
-        import json
-
-        out.write_text(json.dumps(data, indent=1) + "\n")
+        write_output(out, result.to_json() + "\n")
         print(f"result written to {out}")
     return 0 if result.found else 1
 
 
 def add_search_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
+    from console.cli.search_args import add_search_arguments
+
     p = sub.add_parser("search", help="find an object headless on the simulator: choose viewpoints, move, "
                                       "capture and map until it is found",
                        description="Find an object in the simulator's room with the console's search loop "
-                                   "(no browser): prints each step and writes the result as JSON.")
-    p.add_argument("--target", required=True, help="what to find: a catalog class (e.g. 'robot dog')")
-    p.add_argument("--world", type=Path, default=None, metavar="FILE",
-                   help="the simulator's hidden room (a world file; default the paper's room)")
-    p.add_argument("--out", default=None, metavar="FILE", help="write the result as JSON here (e.g. result.json)")
-    p.add_argument("--max-captures", type=int, default=20, help="capture budget (default 20)")
-    p.add_argument("--max-time", type=float, default=900.0, help="time budget [s] (default 900)")
-    p.add_argument("--battery-reserve", type=float, default=100 * BATTERY_RESERVE, metavar="PCT",
-                   help=f"end the search when the charge falls below this [%%] (default {100 * BATTERY_RESERVE:.0f}; "
-                        "at least 25, where the console refuses new moves)")
-    p.add_argument("--time-scale", type=float, default=8.0,
-                   help="simulated seconds per wall-clock second (default 8)")
-    p.add_argument("--perception", choices=("exact", "noisy"), default="exact",
-                   help="'exact' (default, the render's ground truth) or 'noisy' (box jitter, 10 %% missed and "
-                        "occasional false detections, as morphonavi console --perception noisy)")
+                                   "(no browser): prints each step and writes the result as JSON. Every option "
+                                   "is checked before the simulator starts.")
+    add_search_arguments(p)
     p.set_defaults(func=cmd_search, command="search")
 
 

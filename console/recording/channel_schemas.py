@@ -17,6 +17,7 @@ from planner.mission_schema import MISSION_SCHEMA
 
 from console.recording import recording_schemas as rs
 from console.session.search_report import STEP_KINDS
+from console.session.search_result_schema import recorded_result_schema
 
 _NUM = {"type": "number"}
 _VEC3 = {"type": "array", "items": _NUM, "minItems": 3, "maxItems": 3}
@@ -121,18 +122,9 @@ CHANNEL_SCHEMAS: dict[str, dict[str, Any]] = {
             "path": {"type": "array", "items": _VEC3, "description": "waypoints, world frame [m]"}},
             "required": ["id", "kinds", "path"]}, {"type": "null"}], "description": "the move's mission"},
     }, required=["search_id", "index", "kind", "text"]),
-    rs.SEARCH_RESULT: _topic("morphonavi.SearchResult", "how a search ended (result.json)", {
-        "search_id": {"type": "string"}, "found": {"type": "boolean"}, "target": {"type": "string"},
-        "target_id": {"type": ["string", "null"]}, "target_position": _NULL_VEC3,
-        "seen_by": {"type": "array", "items": {"type": "string"}}, "final_position": _NULL_VEC3,
-        "distance_to_target": {"type": ["number", "null"], "description": "[m] in plan"},
-        "path_length": {"type": "number", "description": "[m]"}, "captures": {"type": "integer"},
-        "time": {"type": "number", "description": "[s]"}, "reason": {"type": "string"},
-        "seen_share": {"type": ["number", "null"], "description": "share of the workspace seen [0..1]"},
-        "left_unseen": {"type": "string"}, "battery": {"type": ["number", "null"], "description": "charge [0..1]"},
-        "choose_seconds": {"type": "array", "items": _NUM, "description": "each next-viewpoint choice [s]"},
-        "steps": {"type": "array", "items": {"type": "string"}},
-    }, required=["search_id", "found", "reason"]),
+    rs.SEARCH_RESULT: {**_topic("morphonavi.SearchResult", "how a search ended (result.json, "
+                                "docs/schemas/search_result.schema.json, with the search's id)", {}),
+                       **recorded_result_schema()},
 }
 """Schema of each JSON topic (a topic without one here gets a bare object schema)."""
 

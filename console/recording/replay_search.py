@@ -50,6 +50,10 @@ def search_line(steps: Sequence[dict[str, Any]], result: dict[str, Any] | None) 
     if result is not None:
         how = "found" if result.get("found") else "ended"
         text += f"<br><b>{how}</b>: {html.escape(str(result.get('reason', '')))}"
+        contacts = result.get("contacts") or 0  # (recordings made before the field have none)
+        if isinstance(contacts, int) and contacts > 0:
+            text += f"; {contacts} move{'s' if contacts > 1 else ''} ended in a contact with something the map " \
+                    "did not show"
         if result.get("left_unseen"):
             text += f"; left unseen: {html.escape(str(result['left_unseen']))}"
     return f"<small>{text}</small>"

@@ -10,10 +10,12 @@ ends with a ``battery: ...`` report before either acts, so the operator can stil
 
 from __future__ import annotations
 
+import difflib
 import json
 import math
 import re
 from dataclasses import asdict, dataclass, field
+from typing import Any
 
 from console.session.operator_state import BATTERY_LOW
 from console.session.session_types import SessionError
@@ -27,6 +29,13 @@ GAIN_MIN = 0.25
 MODES = ("auto", "step")
 MISSION_TIMEOUT = 900.0
 """Longest wait for one move [s]."""
+MAX_CAPTURES = 200
+"""Largest capture budget."""
+MIN_TIME, MAX_TIME = 30.0, 86400.0
+"""Time budget's range [s]."""
+TARGET_MAX_CHARS = 200
+CATALOG_FILE = "assets/catalog.toml"
+"""Where a new class (name, detector prompts, size) is added so the perception looks for it."""
 BATTERY_RESERVE = BATTERY_LOW + 0.05
 """Default battery budget: the search ends below this charge [0..1] (the console refuses new moves
 below :data:`~console.session.operator_state.BATTERY_LOW`; the reserve is left to Return or land)."""
@@ -58,16 +67,17 @@ class SearchConfig:
     min_battery: float = BATTERY_RESERVE
 
     def __post_init__(self) -> None:
-        if not isinstance(self.target, str) or not self.target.strip() or len(self.target) > 200:
-            raise SessionError("target: must be 1..200 characters (a catalog class or a prompt)")
+        check_target(self.target, "target")
         if self.mode not in MODES:
             raise SessionError(f"mode: must be one of {', '.join(MODES)}, got {self.mode!r}")
-        if isinstance(self.max_captures, bool) or not isinstance(self.max_captures, int) or not 1 <= self.max_captures <= 200:
-            raise SessionError(f"max_captures: must be a whole number within 1..200, got {self.max_captures!r}")
-        for name, hi in (("max_time", 86400.0), ("target_height", 10.0)):
+        n = self.max_captures
+        if isinstance(n, bool) or not isinstance(n, int) or not 1 <= n <= MAX_CAPTURES:
+            raise SessionError(f"max_captures: must be a whole number within 1..{MAX_CAPTURES}, got {n!r}")
+        for name, lo, hi in (("max_time", MIN_TIME, MAX_TIME), ("target_height", 0.0, 10.0)):
             v = getattr(self, name)
-            if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or not 0 < v <= hi:
-                raise SessionError(f"{name}: must be finite and within 0..{hi:g}, got {v!r}")
+            ok = isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) and v <= hi
+            if not ok or not (v >= lo if lo > 0 else v > lo):
+                raise SessionError(f"{name}: must be finite and within {lo:g}..{hi:g}, got {v!r}")
         b = self.min_battery
         if isinstance(b, bool) or not isinstance(b, (int, float)) or not math.isfinite(b) or not BATTERY_LOW <= b < 1:
             raise SessionError(f"min_battery: must be finite and within {BATTERY_LOW:g}..1 (a fraction of the charge; "
@@ -105,12 +115,45 @@ class SearchResult:
         return json.dumps(asdict(self), indent=1)
 
 
+def check_target(target: Any, name: str = "target") -> str:
+    """The target's words, stripped, when the perception can name them; :class:`SessionError` naming ``name``.
+
+    A target resolves to a catalog class by name, synonym or detector prompt (case, spaces, hyphens, a
+    plural and a leading article ignored: :meth:`pipeline.catalog.Catalog.lookup`).
+    """
+    if not isinstance(target, str) or not target.strip() or len(target.strip()) > TARGET_MAX_CHARS:
+        got = (repr(target) if not isinstance(target, str) else f"{len(target.strip())} characters" if target.strip()
+               else "nothing")
+        raise SessionError(f"{name}: must be 1..{TARGET_MAX_CHARS} characters (what to find, e.g. 'robot dog'), "
+                           f"got {got}")
+    text = target.strip()
+    if target_class(text) is not None:
+        return text
+    from pipeline.catalog import default_catalog, normalize_label
+
+    names = [n.replace("_", " ") for n in default_catalog().names]
+    key = normalize_label(text)
+    near = [n for n in names if key and key in normalize_label(n)]
+    near += [n for n in difflib.get_close_matches(text.lower(), names, n=3, cutoff=0.6) if n not in near]
+    hint = f" Did you mean {' or '.join(repr(n) for n in near[:3])}?" if near else ""
+    raise SessionError(
+        f"{name}: {text!r} is not an object the perception can name.{hint} It looks for the catalog's classes "
+        f"(a class, one of its synonyms or one of its detector prompts, e.g. 'robot dog', 'quadruped', "
+        f"'a quadruped robot'): {', '.join(names)}. To find something else, add it to the catalog "
+        f"({CATALOG_FILE}: a name, the open-vocabulary prompts the detector looks for, a size)")
+
+
+def target_class(target: str) -> Any:
+    """The catalog class (:class:`pipeline.catalog.CatalogEntry`) ``target`` resolves to, or ``None``."""
+    from pipeline.catalog import default_catalog
+
+    return default_catalog().lookup(target)
+
+
 def target_height(target: str, default: float = 0.6) -> float:
     """The catalog's height [m] of ``target``'s class, else ``default`` (a prompt, an unknown class)."""
     try:
-        from pipeline.catalog import Catalog
-
-        entry = Catalog.load().lookup(target.strip().replace(" ", "_"))
+        entry = target_class(target)
         h = entry.height if entry is not None else None
         return float(h) if h else default
     except Exception:  # no catalog: the default
@@ -118,9 +161,15 @@ def target_height(target: str, default: float = 0.6) -> float:
 
 
 def target_matches(label: str, target: str) -> bool:
+    """Whether an object labelled ``label`` (a catalog class name) is what ``target`` asks for: the same
+    words, or the class the target's words resolve to (``quadruped`` finds ``robot_dog``)."""
     a, b = _norm(label), _norm(target)
-    return a == b or (b.endswith("s") and a == b[:-1])
+    if a == b or (b.endswith("s") and a == b[:-1]):
+        return True
+    entry = target_class(target)
+    return entry is not None and _norm(entry.name) == a
 
 
-__all__ = ["BATTERY_RESERVE", "CONFIRM_CAPTURES", "GAIN_MIN", "MISSION_TIMEOUT", "MODES", "SURE_SCORE", "SURE_SIGMA",
-           "SearchConfig", "SearchResult", "target_height", "target_matches"]
+__all__ = ["BATTERY_RESERVE", "CATALOG_FILE", "CONFIRM_CAPTURES", "GAIN_MIN", "MAX_CAPTURES", "MAX_TIME", "MIN_TIME",
+           "MISSION_TIMEOUT", "MODES", "SURE_SCORE", "SURE_SIGMA", "TARGET_MAX_CHARS", "SearchConfig", "SearchResult",
+           "check_target", "target_class", "target_height", "target_matches"]

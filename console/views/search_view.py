@@ -14,8 +14,9 @@ import numpy as np
 import viser
 
 from console.session.operator_state import BATTERY_LOW
-from console.session.search import MODES, SearchConfig, SearchJob
-from console.session.search_types import BATTERY_RESERVE
+from console.session.search import MODES, SearchJob
+from console.session.search_inputs import PANEL_NAMES, search_config
+from console.session.search_types import BATTERY_RESERVE, MAX_CAPTURES, MAX_TIME, MIN_TIME
 from console.session.session import JOB, RUN, SEARCH, Session, SessionError
 from console.views.client_notice import tell
 from console.views.refresher import Refresher
@@ -42,13 +43,15 @@ class SearchView:
                  height_of: Callable[[str], float]) -> None:
         self._server, self._session, self._job, self._height_of = server, session, job, height_of
         gui = server.gui
-        self.target = gui.add_text("Find", "robot dog", hint="A catalog class or the words for the object")
+        self.target = gui.add_text("Find", "robot dog", hint="A catalog class, one of its synonyms or detector prompts "
+                                   "(robot dog, quadruped, a quadruped robot); other words are refused with the classes "
+                                   "the perception can name")
         self.mode = gui.add_dropdown("Search mode", MODES, initial_value="auto",
                                      hint="auto: moves on its own; step: each move waits for Approve step")
-        self.captures = gui.add_number("Capture budget", 20, min=1, max=200, step=1)
-        self.minutes = gui.add_number("Time budget [min]", 15.0, min=0.5, max=600.0, step=0.5)
+        self.captures = gui.add_number("Capture budget", 20, min=1, max=MAX_CAPTURES, step=1)
+        self.minutes = gui.add_number("Time budget [min]", 15.0, min=MIN_TIME / 60.0, max=MAX_TIME / 60.0, step=0.5)
         self.reserve = gui.add_number("Battery reserve [%]", round(100 * BATTERY_RESERVE), min=round(100 * BATTERY_LOW),
-                                      max=95, step=1, hint="The search ends when the charge falls below this, before "
+                                      max=99, step=1, hint="The search ends when the charge falls below this, before "
                                       "the console's battery rules act (left to Return or land)")
         self.start = gui.add_button("Start search", icon=viser.Icon.SEARCH, color="blue",
                                     hint="Capture, choose the next viewpoint, go there, repeat until it is found")
@@ -72,15 +75,11 @@ class SearchView:
         self.refresh()
 
     def _start(self) -> None:
-        target = str(self.target.value).strip()
-        try:
-            captures = int(self.captures.value)
-            minutes = float(self.minutes.value)
-            reserve = float(self.reserve.value) / 100.0
-        except (TypeError, ValueError):
-            raise SessionError("the budgets must be numbers") from None
-        self._job.start(SearchConfig(target, mode=str(self.mode.value), max_captures=captures,
-                                     max_time=60.0 * minutes, target_height=self._height_of(target), min_battery=reserve))
+        """Start the search the fields ask for; every field is checked first, as ``morphonavi search`` checks
+        its options (:func:`~console.session.search_inputs.search_config`: same rules, same words)."""
+        self._job.start(search_config(PANEL_NAMES, self.target.value, mode=self.mode.value,
+                                      max_captures=self.captures.value, max_time=self.minutes.value,
+                                      battery_reserve=self.reserve.value, height_of=self._height_of))
 
     def _act(self, event: Any, action: Callable[[], Any]) -> None:
         try:

@@ -8,6 +8,8 @@ import math
 from pathlib import Path
 
 from console.cli.morphonavi import main
+from console.schemas import SCHEMAS
+from pipeline.schema_check import schema_errors
 
 
 def test_search_finds_the_dog_behind_the_line_and_writes_the_result(tmp_path: Path, capsys) -> None:
@@ -16,6 +18,7 @@ def test_search_finds_the_dog_behind_the_line_and_writes_the_result(tmp_path: Pa
     text = capsys.readouterr().out
     assert code == 0, text[-3000:]
     data = json.loads(out.read_text())
+    assert schema_errors(SCHEMAS["search_result"], data) == []  # the documented schema (docs/schemas)
     for key in ("found", "target_id", "final_position", "distance_to_target", "path_length", "captures", "time",
                 "reason"):
         assert key in data, key
@@ -29,6 +32,20 @@ def test_search_finds_the_dog_behind_the_line_and_writes_the_result(tmp_path: Pa
 
 def test_search_refuses_bad_options_naming_them(tmp_path: Path, capsys) -> None:
     assert main(["search", "--target", "robot dog", "--max-captures", "0"]) == 2
-    assert "max_captures: must be a whole number" in capsys.readouterr().err
+    assert "--max-captures: must be a whole number" in capsys.readouterr().err
     assert main(["search", "--target", "robot dog", "--world", str(tmp_path / "nope.json")]) == 2
     assert "--world" in capsys.readouterr().err
+
+
+def test_a_search_ended_by_its_budget_writes_a_result_following_the_documented_schema(tmp_path: Path, capsys) -> None:
+    """A synonym of the class ('quadruped'), noisy perception with a seed, one capture: not found, exit 1."""
+    out = tmp_path / "result.json"
+    code = main(["search", "--target", "quadruped", "--max-captures", "1", "--perception", "noisy", "--seed", "7",
+                 "--out", str(out)])
+    text = capsys.readouterr().out
+    assert code == 1, text[-3000:]
+    assert "noisy ground-truth perception, noise seed 7" in text
+    data = json.loads(out.read_text())
+    assert schema_errors(SCHEMAS["search_result"], data) == [], data
+    assert data["found"] is False and data["captures"] == 1 and data["target"] == "quadruped"
+    assert "budget of 1 capture" in data["reason"] and data["left_unseen"] and data["contacts"] == 0

@@ -170,6 +170,24 @@ def _browser_missing() -> str | None:
 
 
 @pytest.mark.skipif(_browser_missing() is not None, reason=_browser_missing() or "")
+def _click_until(page: Any, name: str, done: Any, what: str, timeout: float = 120.0) -> None:
+    """Click the button ``name`` until ``done`` (the replay's state) holds: under load a click can land while
+    the panel is re-drawn (the button detached) and do nothing, so it is found and clicked again."""
+    import time
+
+    from playwright.sync_api import Error
+
+    deadline = time.monotonic() + timeout
+    while not done():
+        left = deadline - time.monotonic()
+        assert left > 0, f"timed out clicking {name!r} for {what}"
+        try:
+            page.get_by_role("button", name=name, exact=True).first.click(timeout=max(1000, min(30_000, left * 1000)))
+        except Error:  # detached or covered while re-drawn: find it again
+            pass
+        wait_until(done, min(10.0, max(0.1, deadline - time.monotonic())), 0.05)
+
+
 def test_replay_in_the_browser_plays_and_pauses(recorded: Any, replay: Any, tmp_path: Path) -> None:
     """The page has the time slider and Play / Pause; a screenshot mid-mission goes to docs/replay.png
     when MORPHONAVI_UPDATE_SCREENSHOT=1."""
@@ -195,10 +213,8 @@ def test_replay_in_the_browser_plays_and_pauses(recorded: Any, replay: Any, tmp_
             assert wait_until(lambda: len(replay.server.get_clients()) == 1, 60), "the page did not connect"
             page.get_by_text("Time [s]").first.wait_for(timeout=60_000)
             replay.seek(0.0)
-            play.click()
-            assert wait_until(lambda: replay.playing and replay.time > 0.0, 60), "Play did not start the replay"
-            page.get_by_role("button", name="Pause").click()
-            assert wait_until(lambda: not replay.playing, 60), "Pause did not stop the replay"
+            _click_until(page, "Play", lambda: replay.playing and replay.time > 0.0, "Play to start the replay")
+            _click_until(page, "Pause", lambda: not replay.playing, "Pause to stop the replay")
             # mid-mission: the robot on its way, the mission path, the capture's photo
             replay.seek_time((running[0] + done[-1]) // 2)
             assert replay.session.run.state == "running" and replay.session.mission is not None

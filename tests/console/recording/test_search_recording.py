@@ -4,6 +4,7 @@ mode: three approved steps, the first two turns in place and the third a walk, t
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import time
 from pathlib import Path
@@ -77,6 +78,8 @@ def test_search_steps_and_result_are_recorded_following_their_schemas(recorded: 
     assert len(ends) == 1 and ends[0]["reason"] == "stopped by the operator" and ends[0]["found"] is False
     assert ends[0]["search_id"] == steps[0]["search_id"] and ends[0]["captures"] == result.captures
     assert ends[0]["left_unseen"], ends[0]  # what was left unseen, and why
+    assert ends[0]["contacts"] == result.contacts  # every field of the result, contacts too
+    assert {k for k in ends[0] if k != "search_id"} == set(dataclasses.asdict(result))
 
 
 def test_replay_draws_the_viewpoints_and_the_chosen_paths(recorded: Any) -> None:
@@ -88,6 +91,7 @@ def test_replay_draws_the_viewpoints_and_the_chosen_paths(recorded: Any) -> None
         rec = app.recording
         end = rec.state_at(rec.end)
         assert end.search_result is not None and end.search_result["reason"] == "stopped by the operator"
+        assert end.search_result["contacts"] == result.contacts  # replay reads every field of the result
         view = app.views["search"]
         app.seek(rec.duration)
         assert view.drawn["viewpoints"] >= 3 and view.drawn["paths"] >= 1, view.drawn
@@ -98,3 +102,14 @@ def test_replay_draws_the_viewpoints_and_the_chosen_paths(recorded: Any) -> None
         assert "searching for robot dog" in view._line.content
     finally:
         app.stop()
+
+
+def test_the_replay_line_says_how_many_moves_ended_in_a_contact() -> None:
+    from console.recording.replay_search import search_line
+
+    steps = [{"search_id": "s1", "index": 4, "text": "capture 2"}]
+    end = {"search_id": "s1", "found": True, "reason": "found robot_dog-1 at 0.62 m", "left_unseen": "", "contacts": 2}
+    assert "2 moves ended in a contact with something the map did not show" in search_line(steps, end)
+    assert "contact" not in search_line(steps, {**end, "contacts": 0})
+    old = {k: v for k, v in end.items() if k != "contacts"}  # a recording made before the field
+    assert "found robot_dog-1" in search_line(steps, old) and "contact" not in search_line(steps, old)
