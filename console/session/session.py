@@ -82,7 +82,7 @@ class Session(SessionReads, Persistence, Undo, OperatorRules, KnownSpaceSession)
         autosave: Write ``session.json`` after every change.
         empty_is_unseen: The console's rule for a robot in a room nobody has looked at: before the
             first capture, a map with no scene file spawned or loaded is space no capture has seen
-            (planned as all unknown: :meth:`~console.session.known_space_state.KnownSpaceSession.nothing_seen`).
+            (planned as all unknown: :meth:`~console.session.known_space_state.KnownSpaceSession.nothing_seen_locked`).
             Without it (scripts, benches, hand-made maps) a map without known space is taken as fully known.
     """
 
@@ -457,9 +457,11 @@ class Session(SessionReads, Persistence, Undo, OperatorRules, KnownSpaceSession)
         return self._follow_robot_locked()
 
     def _apply_saved(self, saved: Any, where: str, remember: str | None) -> list[str]:
-        """A restored or loaded map with objects and no known space is a hand-made one (fully known)."""
+        """A restored or loaded map without known space holding an object no capture mapped (a scene
+        file's) is a hand-made one, taken as fully known."""
         with self._lock:
-            self._map_given = self._map_given or (saved.known is None and bool(saved.scene.objects))
+            self._map_given = self._map_given or (saved.known is None and any(
+                o.source.capture is None for o in saved.scene.objects))
         return super()._apply_saved(saved, where, remember)
 
     def _ready_locked(self, state: Any) -> Any:

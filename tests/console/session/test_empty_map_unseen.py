@@ -9,6 +9,7 @@ from __future__ import annotations
 import json
 import math
 import time
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
@@ -20,7 +21,7 @@ from console.session.goal_rules import NOTHING_SEEN
 from console.session.session import Session, SessionError
 from console.session.session_types import robot_snapshot
 from pipeline.camera.geometry import CameraMount, Intrinsics, Pose, camera_pose_in_world
-from pipeline.scene import Scene, SceneObject
+from pipeline.scene import Scene, SceneObject, Source
 from planner.grid import Closed
 
 START = (2.5, 0.7, 0.0)
@@ -134,6 +135,16 @@ def test_a_restored_session_keeps_its_rule(tmp_path: Path) -> None:
     again = _console(tmp_path, "empty")
     assert again.restore_last() is not None and again.known_summary().rule == "nothing_seen"
     assert again.add_goal(BEHIND).message.startswith(NOTHING_SEEN)
+
+
+def test_a_restored_map_of_captured_objects_without_its_known_space_is_not_a_hand_made_map(tmp_path: Path) -> None:
+    s = _console(tmp_path, autosave=True)
+    s.spawn(Scene(objects=(replace(BOX, source=Source(capture="0001", method="ground_truth")),)), origin="capture 0001")
+    data = json.loads((tmp_path / "s" / "session.json").read_text())
+    assert data["known_space"] is None and data["scene"]["objects"]  # e.g. a known space that could not be kept
+    again = _console(tmp_path)
+    assert again.restore_last() is not None and len(again.scene.objects) == 1
+    assert again.known_summary().rule == "nothing_seen" and again.add_goal(BEHIND).message.startswith(NOTHING_SEEN)
 
 
 def test_scripts_without_the_consoles_flag_keep_the_fully_known_rule(tmp_path: Path) -> None:
