@@ -233,12 +233,9 @@ def cmd_console(args: argparse.Namespace) -> int:
     if args.world is not None:
         if str(args.robot).startswith("mavlink:"):
             raise CliError("--world is the simulator's room: drop it with --robot mavlink:... (a real robot is in its own room)")
-        from console.link.world_file import WorldError, load_world
+        from console.cli.world_option import load_world_option
 
-        try:
-            world = load_world(args.world)
-        except WorldError as exc:
-            raise CliError(f"--world {exc}") from None
+        world = load_world_option(args.world)
     from console.cli.console_folders import check_console_folders
 
     check_console_folders(args, DEFAULT_SCENES)  # files given for folders, nested folders: before anything starts

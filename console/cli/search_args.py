@@ -18,13 +18,13 @@ from pathlib import Path
 from typing import Any
 
 from console.cli.errors import CliError
+from console.cli.world_option import load_world_option
 from console.session.search_types import BATTERY_RESERVE, MAX_CAPTURES, MAX_TIME, MIN_TIME, SearchConfig
 
 TIME_SCALE = (0.1, 50.0)
 """Range of ``--time-scale``: simulated seconds per wall-clock second."""
 SEED_MAX = 2**32 - 1
 PERCEPTIONS = ("exact", "noisy")
-WORLD_EXAMPLE = "examples/worlds/office.world.json"
 
 
 @dataclass(frozen=True)
@@ -72,41 +72,6 @@ def check_seed(text: Any, perception: str) -> int | None:
         raise CliError("--seed: draws the perception noise: only with --perception noisy (exact perception has "
                        "no randomness)")
     return n
-
-
-def load_world_option(path: Path | None, option: str = "--world") -> Any:
-    """The simulator's room from ``--world`` (``None``: the paper's room); :class:`CliError` in words."""
-    from console.link.world_file import WorldError, load_world, paper_world
-
-    if path is None:
-        return paper_world()
-    p = Path(path).expanduser()
-    if p.is_dir():
-        raise CliError(f"{option} {path}: is a folder; give a world file such as {WORLD_EXAMPLE}")
-    try:
-        return load_world(p)
-    except WorldError as exc:
-        raise CliError(f"{option} {_wrong_kind(p, option) or exc}") from None
-    except OSError as exc:
-        from pipeline.file_kind import os_error_words
-
-        raise CliError(f"{option} {path}: cannot read it: {os_error_words(exc, p)}") from None
-
-
-def _wrong_kind(p: Path, option: str) -> str:
-    """``"x.scene.json is a scene ..., not a simulator world file: ..."`` when ``p`` is another MorphoNavi
-    file, else ``""``."""
-    import json
-
-    from pipeline.file_kind import kind_of_json, wrong_kind
-
-    try:
-        kind = kind_of_json(json.loads(p.read_text(encoding="utf-8")))
-    except (OSError, UnicodeDecodeError, ValueError, RecursionError):
-        return ""
-    if kind in ("world", "json"):
-        return ""
-    return wrong_kind("", str(p), kind, "world")
 
 
 def check_out(out: str | None, world: Path | None) -> Path | None:
@@ -174,4 +139,4 @@ def add_search_arguments(p: argparse.ArgumentParser) -> None:
 
 
 __all__ = ["PERCEPTIONS", "SearchRequest", "TIME_SCALE", "add_search_arguments", "check_out", "check_seed",
-           "load_world_option", "search_request"]
+           "search_request"]

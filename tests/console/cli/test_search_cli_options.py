@@ -104,3 +104,14 @@ def test_the_first_report_runs_as_a_command_without_a_traceback(tmp_path: Path) 
     assert proc.returncode == 2, proc.stderr
     assert "Traceback" not in proc.stderr and "--time-scale: must be a number within 0.1..50" in proc.stderr
 
+
+
+def test_the_console_reads_world_the_same_way(capsys, tmp_path: Path) -> None:
+    """`morphonavi console --world` shares the reader (console/cli/world_option.py)."""
+    for world, words in ((tmp_path, f"--world {tmp_path}: is a folder; give a world file such as "
+                                    "examples/worlds/office.world.json"),
+                         (SCENE, f"--world {SCENE} is a scene")):
+        assert main(["console", "--world", str(world), "--session", str(tmp_path / "s")]) == 2
+        err = capsys.readouterr().err
+        assert words in err and "Errno" not in err and "Traceback" not in err, err
+    assert not (tmp_path / "s").exists()  # refused before the console started
