@@ -13,6 +13,8 @@ centre, size ``(w, h, l)`` and yaw about +z [rad] (the length ``l`` along the ya
 - :func:`outside_workspace`: how far a new object's footprint reaches out of the workspace's floor plan;
   an object whose centre is outside it is not added (the planner would ignore it; the operator is told
   why).
+- :func:`keep_inside`: an update that carries an object's centre out of the workspace's floor plan is
+  undone to the nearest point inside, and flagged.
 - :func:`next_id`: a new object's id is the next free number of its class (``cardboard_box-7``).
 """
 
@@ -97,6 +99,31 @@ def outside_workspace(obj: SceneObject, lo: Sequence[float], hi: Sequence[float]
     return centre_out, float(np.linalg.norm(beyond, axis=1).max())
 
 
+def keep_inside(objects: list[SceneObject], ids: Iterable[str], lo: Sequence[float], hi: Sequence[float]
+                ) -> list[tuple[str, str]]:
+    """Move (in place) each object of ``ids`` whose centre left the workspace's floor plan back onto its edge.
+
+    A new object with its centre outside is not added (:func:`outside_workspace`); an update can still
+    carry one out (a box at the end of a line, seen mostly hidden from the side, put beyond the wall).
+    The room holds its objects, so the estimate is the nearest point inside (world x, y; ``lo``/``hi``
+    the workspace corners). Returns ``(id, what was corrected)`` per object moved (also its flag).
+    """
+    from dataclasses import replace
+
+    wanted = set(ids)
+    out: list[tuple[str, str]] = []
+    for n, o in enumerate(objects):
+        if o.id not in wanted or o.is_pinned:
+            continue
+        x, y = (min(max(o.position[a], lo[a]), hi[a]) for a in (0, 1))
+        far = math.hypot(x - o.position[0], y - o.position[1])
+        if far > 0:
+            what = f"its views put its centre {far:.2f} m outside the workspace: kept at its edge"
+            objects[n] = replace(o, position=(x, y, o.position[2]), flags=o.flags + (what,))
+            out.append((o.id, what))
+    return out
+
+
 _NUMBERED = re.compile(r"^(.*)-(\d+)$")
 
 
@@ -115,4 +142,5 @@ def next_id(wanted: str, label: str, taken: Iterable[str]) -> str:
     return f"{label}-{top + 1}"
 
 
-__all__ = ["RAY_SIGMAS", "along_ray_match", "half_extent", "next_id", "outside_workspace", "ray_interval"]
+__all__ = ["RAY_SIGMAS", "along_ray_match", "half_extent", "keep_inside", "next_id", "outside_workspace",
+           "ray_interval"]

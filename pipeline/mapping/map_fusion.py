@@ -47,8 +47,9 @@ import numpy as np
 from scipy.optimize import linear_sum_assignment
 
 from pipeline.mapping import map_consistency
-from pipeline.mapping.map_extent import RAY_SIGMAS, along_ray_match, next_id, outside_workspace
+from pipeline.mapping.map_extent import RAY_SIGMAS, along_ray_match, keep_inside, next_id, outside_workspace
 from pipeline.mapping.map_merge import check_bounds, merge_overlapping, taken_overlap
+from pipeline.mapping.map_misses import drop_unconfirmed, record_misses
 from pipeline.mapping.map_support import footprint_overlap, supported_z, vertical_overlap
 from pipeline.mapping.observation_sigma import (MIN_RANGE, ObservationSigma, degenerate, distance_to_box,
                                                 observation_sigma, ray_covariance)
@@ -119,6 +120,8 @@ class FusionReport:
     """Why the capture was not merged (the map is unchanged), ``None`` if it was."""
     merged: tuple[tuple[str, str], ...] = ()
     """``(kept id, removed id)``: two objects of one class that overlapped, merged (one object mapped twice)."""
+    removed: tuple[tuple[str, str], ...] = ()
+    """``(id, why)``: objects seen by one capture only that later captures did not see where they should have."""
 
     def ids(self, action: Action) -> list[str]:
         """Map object ids (``observation`` ids for ``rejected``) with this outcome."""
@@ -149,6 +152,7 @@ class FusionReport:
                 else f"{o.object_id}: {o.reason}" for o in self.outcomes if o.action == "recorded"]
         out += [f"{oid}: {what}" for oid, what in self.corrections]
         out += [f"{gone} merged into {kept}: they overlapped (one object mapped twice)" for kept, gone in self.merged]
+        out += [f"{oid}: {why}" for oid, why in self.removed]
         if self.held_back:
             out.insert(0, f"capture held back: {self.held_back}")
         return out
@@ -232,15 +236,25 @@ def _cost(obs: SceneObject, r_obs: np.ndarray, obj: SceneObject, p_obj: np.ndarr
     points = [(np.asarray(obj.position), p_obj)]
     if obj.is_pinned:  # also where the operator's object was seen before it was pinned
         points += [(np.asarray(s.position), _cov(s)) for s in _history(obj, captures) if s.capture]
-    best = math.inf
+    best, spread = math.inf, 0.0
     for pos, cov in points:
         d = np.asarray(obs.position) - pos
-        best = min(best, float(d @ np.linalg.solve(cov + r_obs, d)))
+        m2 = float(d @ np.linalg.solve(cov + r_obs, d))
+        if m2 < best:
+            best, spread = m2, _log_spread(cov, r_obs)
     if best <= cfg.gate:
-        return best
+        return best + spread
     if vertical_overlap(obs, obj) >= cfg.min_vertical and footprint_overlap(obs, obj) >= cfg.min_overlap:
-        return cfg.gate
+        return cfg.gate + _log_spread(points[0][1], r_obs)
     return math.inf
+
+
+def _log_spread(p_obj: np.ndarray, r_obs: np.ndarray) -> float:
+    """``ln det(P + R) - ln det(R)`` (>= 0): how much the map object's own uncertainty widens the
+    pair's; added to the squared Mahalanobis distance it makes the cost the pair's negative
+    log-likelihood (up to the observation's constant), so a poorly known object (one cut view) does
+    not draw a good view away from the well-known object it lies on."""
+    return float(np.linalg.slogdet(p_obj + r_obs)[1] - np.linalg.slogdet(r_obs)[1])
 
 
 def _candidates(obs: Sequence[SceneObject], covs: Sequence[np.ndarray], objects: Sequence[SceneObject],
@@ -452,11 +466,14 @@ def fuse(scene: Scene, observations: Scene, *, catalog: Any = None, config: Fusi
     merged = merge_overlapping(objects, touched, keys, cfg.min_overlap, cfg.min_vertical,
                                lambda a, b: _refit(a, _history(a, captures) + _history(b, captures), a),
                                {o.id for o in scene.objects})
-    corrections = _support(objects, touched)
+    record_misses(objects, observations.captures, touched | {o.object_id for o in outcomes if o.object_id})
+    removed = drop_unconfirmed(objects)
+    corrections = [] if bounds is None else keep_inside(objects, touched, bounds[0], bounds[1])
+    corrections += _support(objects, touched)
     known = {c.id for c in scene.captures}
     new_caps = scene.captures + tuple(c for c in observations.captures if c.id not in known)
     return Scene(objects=tuple(objects), captures=new_caps), FusionReport(tuple(outcomes), tuple(corrections),
-                                                                          merged=tuple(merged))
+                                                                          merged=tuple(merged), removed=tuple(removed))
 
 
 def _support(objects: list[SceneObject], touched: set[str]) -> list[tuple[str, str]]:
@@ -470,7 +487,7 @@ def _support(objects: list[SceneObject], touched: set[str]) -> list[tuple[str, s
         if fix is None:
             continue
         z, what = fix
-        objects[n] = replace(o, position=(o.position[0], o.position[1], z), flags=(what,))
+        objects[n] = replace(o, position=(o.position[0], o.position[1], z), flags=o.flags + (what,))
         out.append((o.id, what))
     return out
 

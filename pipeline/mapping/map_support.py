@@ -81,7 +81,7 @@ def supported_z(obj: SceneObject, others: Sequence[SceneObject]) -> tuple[float,
         return None
     h = obj.size[1]
     bottom = obj.position[2] - h / 2
-    if abs(bottom) <= SUPPORT_TOLERANCE:
+    if abs(bottom) <= SUPPORT_TOLERANCE and obj.position[2] >= 0:  # a centre under the floor: more than half buried
         return None
     best: tuple[float, SceneObject] | None = None
     for o in others:

@@ -45,18 +45,21 @@ def test_the_false_box_reads_as_a_partial_view() -> None:
 
 
 def test_a_chair_mapped_twice_is_merged_once_a_capture_shows_the_two_overlap() -> None:
-    scene, report = fuse(Scene(), _the_bad_capture())
-    assert report.added == ["office_chair-1", "office_chair-2"]  # two detections, nothing to tell them apart yet
-    # a good view of the real chair from the side: it joins the nearer copy, which then overlaps the other
-    side = _capture("side", (0.41, 0.41, 0.35), _chair("office_chair-1", (1.47, 2.33, 0.525), "side",
-                                                           (380, 150, 520, 300)))
-    after, report = fuse(scene, side)
+    """Two far captures that each saw one copy (the other out of their view); a near view between them
+    pulls one onto the other: one chair, the older id, both histories."""
+    scene, _ = fuse(Scene(), _capture("a", (1.2, -1.5, 0.35), _chair("office_chair-1", (1.2, 2.55, 0.525), "a",
+                                                                      (250, 60, 420, 360))))
+    scene, report = fuse(scene, _capture("b", (1.8, -1.7, 0.35), _chair("office_chair-1", (1.8, 2.3, 0.525), "b",
+                                                                         (200, 60, 370, 360))))
+    assert report.added == ["office_chair-2"]  # 0.65 m apart: beyond the gate, no overlap
+    between = _chair("office_chair-1", (1.45, 2.35, 0.525), "c", (250, 60, 420, 360))
+    after, report = fuse(scene, _capture("c", (1.5, 1.2, 0.35), between))
     assert [o.id for o in after.objects] == ["office_chair-1"]
     assert report.merged == (("office_chair-1", "office_chair-2"),)
     assert "office_chair-2 merged into office_chair-1: they overlapped (one object mapped twice)" in report.notes()
     chair = after.object("office_chair-1")
-    assert {s.capture for s in chair.history} == {"bad", "side"} and len(chair.history) == 3
-    assert math.dist(chair.position[:2], TRUE_CHAIR[:2]) < math.dist((1.26, 2.63), TRUE_CHAIR[:2])
+    assert {s.capture for s in chair.history} == {"a", "b", "c"}
+    assert math.dist(chair.position[:2], TRUE_CHAIR[:2]) < 0.15
 
 
 def test_two_chairs_one_capture_saw_apart_are_not_merged() -> None:
