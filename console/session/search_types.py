@@ -135,12 +135,12 @@ def check_target(target: Any, name: str = "target") -> str:
     key = normalize_label(text)
     near = [n for n in names if key and key in normalize_label(n)]
     near += [n for n in difflib.get_close_matches(text.lower(), names, n=3, cutoff=0.6) if n not in near]
-    hint = f" Did you mean {' or '.join(repr(n) for n in near[:3])}?" if near else ""
-    raise SessionError(
-        f"{name}: {text!r} is not an object the perception can name.{hint} It looks for the catalog's classes "
-        f"(a class, one of its synonyms or one of its detector prompts, e.g. 'robot dog', 'quadruped', "
-        f"'a quadruped robot'): {', '.join(names)}. To find something else, add it to the catalog "
-        f"({CATALOG_FILE}: a name, the open-vocabulary prompts the detector looks for, a size)")
+    hint = f" (did you mean {' or '.join(repr(n) for n in near[:3])}?)" if near else ""
+    raise SessionError(  # the first clause is the summary a short notice shows; "; " parts its details
+        f"{name}: {text!r} is not an object the perception can name{hint}; it looks for the catalog's classes, "
+        f"by a class, one of its synonyms or detector prompts (e.g. 'robot dog', 'quadruped', 'a quadruped robot'): "
+        f"{', '.join(names)}; to find something else, add it to the catalog ({CATALOG_FILE}: a name, the "
+        f"open-vocabulary prompts the detector looks for, a size)")
 
 
 def target_class(target: str) -> Any:

@@ -56,7 +56,7 @@ def test_each_bad_number_or_choice_is_refused_naming_its_option(capsys, argv, wo
 
 @pytest.mark.parametrize("target, words", [
     ("unicorn", "--target: 'unicorn' is not an object the perception can name"),
-    ("dog", "Did you mean 'robot dog'?"),
+    ("dog", "(did you mean 'robot dog'?)"),
     ("", "--target: must be 1..200 characters (what to find, e.g. 'robot dog'), got nothing"),
     ("x" * 300, "--target: must be 1..200 characters (what to find, e.g. 'robot dog'), got 300 characters"),
 ])

@@ -59,10 +59,10 @@ def test_the_time_budget_names_its_unit_at_each_door() -> None:
 
 def test_an_unknown_target_is_refused_with_the_classes_the_perception_names_and_how_to_add_one() -> None:
     text = _refusal(CLI_NAMES, "target", "dog")
-    assert "Did you mean 'robot dog'?" in text
+    assert "(did you mean 'robot dog'?)" in text
     assert "robot dog, table, chair" in text and "office chair" in text  # the catalog's classes, as words
     assert "add it to the catalog (assets/catalog.toml" in text and "prompts" in text
-    assert "Did you mean 'robot dog'?" in _refusal(PANEL_NAMES, "target", "robt dog")
+    assert "(did you mean 'robot dog'?)" in _refusal(PANEL_NAMES, "target", "robt dog")
 
 
 def test_good_inputs_make_the_search_with_units_converted() -> None:
