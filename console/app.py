@@ -173,6 +173,9 @@ class ConsoleApp:
         self._layout(perceiver)
         session.subscribe(self._on_session_event)
         self.preload.start()  # the models load in the background; a capture before they are ready waits
+        from console.session.planner_warmup import start_planner_warmup
+
+        start_planner_warmup()  # the planner's compiled kernels loaded now: the first Add goal is planned at once
         self._connect_robot()
         if self.runner is not None and hasattr(self.runner, "close"):
             self._closers.append(self.runner.close)  # stopped before the link closes
@@ -340,6 +343,9 @@ class ConsoleApp:
                                  hint="Ask the robot for a photo and its pose, detect objects and add them to the map")
             self._job_bar = gui.add_progress_bar(0.0, visible=False, animated=True)
             self._job_md = gui.add_markdown(f"<small>perception: <b>{html.escape(perceiver.label)}</b></small>")
+            from console.views.notice_details import NoticeDetails  # a long notice's whole text, one click away
+
+            self.views["notices"] = NoticeDetails(server)
             cap.on_click(self._on_capture)
             from console.session.look import LookJob  # Look around / Look at: turn in place, capture & map
             from console.views.look_view import LookView

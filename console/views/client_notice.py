@@ -7,7 +7,12 @@ replaces it (a "Mission done" replaces the "Mission: walk refused" error before 
 "Capture & map failed" replaces the first), and a tab shows at most :data:`MAX_SHOWN`, the oldest
 closed first: notices never stack over the 3D view. The page shows them at the bottom right of the
 3D view, beside the control panel, never over the middle or the upper left where the operator
-clicks goals.
+clicks goals, nor over the panel's mission buttons.
+
+A capture's notice is short: a body longer than :data:`SHORT_CHARS` (subjects in :data:`SHORTENED`) is cut
+to its summary (its first clause, up to the first "; ", or its first words) and says where the rest is; the whole text goes to the listeners of
+:func:`on_long_notice` (the *Notices: full text* expander under **Capture & map**,
+:mod:`console.views.notice_details`), one click away.
 
 A tab whose connection is lost retries every second whether or not it has the focus
 (:func:`reconnect_script`): viser's page retries only while the tab has the focus, so a tab in the
@@ -16,9 +21,13 @@ background stayed "Disconnected ... reconnecting" after a restart while a new ta
 
 from __future__ import annotations
 
+import logging
 import threading
+import time
 from collections import OrderedDict
-from typing import Any
+from typing import Any, Callable
+
+log = logging.getLogger(__name__)
 
 INFO_SECONDS = 6.0
 """How long a notification that is not an error stays [s]."""
@@ -35,13 +44,64 @@ SUBJECTS = (
     ("capture", ("Capture", "Mapped", "Check the camera pose", "Models not loaded", "Held capture")),
     ("robot", ("Robot link", "Robot says", "Hold", "Land here", "Return", "Disarm", "Vehicle command")),
     ("camera", ("Live camera",)),
-    ("goal", ("No goal there", "Goal not reachable", "Candidate path", "Cannot go there", "Go to ")),
+    ("goal", ("No goal there", "Goal not reachable", "Candidate path", "Cannot go there", "Go to ", "Planning")),
 )
 """Notification subjects by title prefix: newer news about a subject replaces the older notice."""
+
+SHORT_CHARS = 150
+"""Longest notice body shown whole [characters] (about three lines of a notice); longer ones show their summary."""
+
+SHORTENED = ("capture", "Scene file spawned")
+"""Subjects whose long notices are shown as their summary (a capture's or a scene file's report: the objects
+seen, then a note per object); other notices (a refusal and its reason) are shown whole."""
+
+DETAILS_WHERE = "full text: Notices, under Capture & map"
+"""What a shortened notice says about where its whole text is."""
 
 _DEFAULT = object()
 _lock = threading.Lock()
 _shown: dict[Any, "OrderedDict[str, Any]"] = {}  # client id -> subject -> notification handle, oldest first
+_long_listeners: dict[int, list[Callable[[str, str], None]]] = {}  # id(viser server) -> listeners
+_last_long: dict[int, tuple[str, str, float]] = {}  # id(server) -> the last long notice passed on (one per broadcast)
+
+
+def short_body(body: str, limit: int = SHORT_CHARS) -> str | None:
+    """A notice body's summary when ``body`` is longer than ``limit`` characters, else ``None`` (shown whole).
+
+    The summary is the text before the first "; " (a capture's "26 objects seen (2 new, 21 updated) in 4.1 s")
+    when that fits, else the first words that fit, with "…"; then where the whole text is
+    (:data:`DETAILS_WHERE`)."""
+    text = " ".join(str(body).split())
+    if len(text) <= limit:
+        return None
+    head = text.split("; ", 1)[0].rstrip(" .,:;")
+    if len(head) > limit - 1:
+        cut = text[:limit - 1]
+        head = (cut.rsplit(" ", 1)[0] if " " in cut[limit // 2:] else cut).rstrip(" .,:;(")
+    return f"{head} … ({DETAILS_WHERE})"
+
+
+def on_long_notice(server: Any, listener: Callable[[str, str], None]) -> None:
+    """Call ``listener(title, body)`` with the whole text of every notice shown shortened in a tab of the viser
+    ``server`` (once per notice, even when it went to several tabs)."""
+    with _lock:
+        _long_listeners.setdefault(id(server), []).append(listener)
+
+
+def _pass_on_long(client: Any, title: str, body: str) -> None:
+    key = id(getattr(client, "_viser_server", None))
+    now = time.monotonic()
+    with _lock:
+        last = _last_long.get(key)
+        if last is not None and (title, body) == last[:2] and now - last[2] < 5.0:
+            return  # the same notice broadcast to another tab
+        _last_long[key] = (title, body, now)
+        listeners = list(_long_listeners.get(key, ()))
+    for listener in listeners:
+        try:
+            listener(title, body)
+        except Exception:  # noqa: BLE001 - a details panel failing must not stop the notice
+            log.exception("notice details listener failed")
 
 
 def notice_seconds(color: str) -> float:
@@ -74,12 +134,18 @@ def tell(client: Any, title: str, body: str, color: str = "blue", seconds: Any =
 
     ``seconds`` [s] before it closes by itself; by default :func:`notice_seconds` of the colour.
     ``about`` is its subject (default :func:`subject` of the title): a notification about the same
-    subject still shown in that tab is replaced, and the tab keeps at most :data:`MAX_SHOWN`.
+    subject still shown in that tab is replaced, and the tab keeps at most :data:`MAX_SHOWN`. A body of a
+    :data:`SHORTENED` subject longer than :data:`SHORT_CHARS` is shown as its summary (:func:`short_body`), the whole text passed to
+    :func:`on_long_notice`'s listeners.
     """
     if client is None:
         return
-    wait = notice_seconds(color) if seconds is _DEFAULT else seconds
     key = about if about is not None else subject(title)
+    short = short_body(body) if key in SHORTENED else None
+    if short is not None:
+        _pass_on_long(client, title, body)
+        body = short
+    wait = notice_seconds(color) if seconds is _DEFAULT else seconds
     cid = getattr(client, "client_id", id(client))
     with _lock:
         shown = _shown.setdefault(cid, OrderedDict())

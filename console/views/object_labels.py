@@ -1,11 +1,16 @@
-"""Object labels that never overlap: drawn per browser tab and decluttered for that tab's view.
+"""Labels that never overlap: drawn per browser tab and decluttered for that tab's view.
 
 viser draws a label as a billboard of constant screen size (``12 px * font_screen_scale`` per em,
-whatever the distance). Every tab gets its own label nodes (``client.scene``); whenever its camera
-moves, the labels are projected into that tab's picture and kept greedily, most important first
-(the selected object's, then the nearest to the camera), skipping any whose box would overlap one
-already kept or the robot's own label, up to :data:`MAX_LABELS`. Zooming in spreads the objects
-apart and shows more labels; selecting an object always shows its label.
+whatever the distance). Every tab gets its own label nodes (``client.scene``) in *layers*: the mapped
+objects' labels (``objects``) and the mission's take-off and landing spots (``paths``, set by the paths
+view). Whenever a tab's camera moves, or the robot or another label moves, the labels are projected into
+that tab's picture and kept greedily, most important first (the selected object's, then the paths', then
+the nearest objects'), skipping any whose box would overlap one already kept, up to :data:`MAX_LABELS`.
+
+Labels every tab shares (server-wide nodes: the robot's, the search's next viewpoint, the agent's, the
+origin's) are always drawn: the decluttered ones leave them free (:func:`fixed_labels` reads them, with
+their text and where they are now, from the viser server), and the goal markers too (:meth:`ClientLabels.set_markers`).
+Zooming in spreads the objects apart and shows more labels; selecting an object always shows its label.
 
 Frames: world z up [m]; the tab's camera pose is viser's (``wxyz`` world <- camera, OpenCV optical
 frame: x right, y down, z forward); pixels are the camera image's (x right, y down).
@@ -13,12 +18,16 @@ frame: x right, y down, z forward); pixels are the camera image's (x right, y do
 
 from __future__ import annotations
 
+import logging
 import math
 import threading
+import weakref
 from dataclasses import dataclass
 from typing import Any, Callable, Sequence
 
 import numpy as np
+
+log = logging.getLogger(__name__)
 
 FONT_SCREEN_SCALE = 0.8
 """Label size (viser's ``font_screen_scale``): an em of ``12 * 0.8`` CSS px."""
@@ -35,16 +44,26 @@ MAX_LABELS = 14
 GAP_PX = 3.0
 """Space kept between two label boxes [CSS px]."""
 
+MARKER_PX = 18.0
+"""Side of the square kept free around a goal marker [CSS px] (a 0.07-0.08 m sphere seen from the default view)."""
+
+LAYERS = ("paths", "objects")
+"""Label layers in order of importance (after the selected object's label, always first)."""
+
 Rect = tuple[float, float, float, float]  # x0, y0, x1, y1 [px], x right, y down
 
 
 @dataclass(frozen=True)
 class LabelSpot:
-    """A label to place: its text, anchor (world [m], the box's bottom centre) and the object ids it names."""
+    """A label to place: its text, its anchor point (world [m]; by default the box's bottom centre) and the
+    object ids it names; ``anchor`` is viser's (``"top-center"``: the box hangs below the point),
+    ``font_scale`` viser's ``font_screen_scale``."""
 
     text: str
     position: tuple[float, float, float]
-    ids: tuple[str, ...]
+    ids: tuple[str, ...] = ()
+    anchor: str = "bottom-center"
+    font_scale: float = FONT_SCREEN_SCALE
 
 
 def project(wxyz: Sequence[float], position: Sequence[float], fov: float, width: float, height: float,
@@ -71,16 +90,20 @@ def project(wxyz: Sequence[float], position: Sequence[float], fov: float, width:
     return (width / 2 + f * p[0] / p[2], height / 2 + f * p[1] / p[2], float(p[2]))
 
 
-def label_rect(text: str, u: float, v: float, px_per_css: float = 1.0) -> Rect:
-    """The screen box [px] of a bottom-centre-anchored label at pixel ``(u, v)`` (viser's layout: one
-    line of ``1.2`` em, a background padding of ``0.2`` line heights), ``px_per_css`` picture pixels
-    per CSS pixel."""
-    em = EM_PX * px_per_css
+def label_rect(text: str, u: float, v: float, px_per_css: float = 1.0, anchor: str = "bottom-center",
+               font_scale: float = FONT_SCREEN_SCALE) -> Rect:
+    """The screen box [px] of a label anchored at pixel ``(u, v)`` (viser's layout: one line of ``1.2`` em, a
+    background padding of ``0.2`` line heights; ``anchor`` as viser's, e.g. ``bottom-center``: the point is the
+    box's bottom centre), ``px_per_css`` picture pixels per CSS pixel."""
+    em = 12.0 * font_scale * px_per_css
     line = 1.2 * em
     pad = 0.2 * line
     w = CHAR_EM * em * max(1, len(text)) + pad
     h = line + pad
-    return (u - w / 2, v - h, u + w / 2, v)
+    vert, _, horiz = anchor.partition("-")
+    x0 = {"left": u, "right": u - w}.get(horiz, u - w / 2)
+    y0 = {"top": v, "bottom": v - h}.get(vert, v - h / 2)
+    return (x0, y0, x0 + w, y0 + h)
 
 
 def overlaps(a: Rect, b: Rect, gap: float = GAP_PX) -> bool:
@@ -111,13 +134,30 @@ def px_per_css(image_height: float) -> float:
     return max(1.0, float(image_height) / 1100.0)
 
 
+@dataclass(frozen=True)
+class FixedLabel:
+    """A label every tab shows (a server-wide node): text, anchor point (world [m]), viser's anchor and scale."""
+
+    text: str
+    position: tuple[float, float, float]
+    anchor: str = "bottom-center"
+    font_scale: float = FONT_SCREEN_SCALE
+
+
+def _as_fixed(r: Any) -> FixedLabel:
+    return r if isinstance(r, FixedLabel) else FixedLabel(str(r[0]), tuple(float(v) for v in r[1]))  # type: ignore[arg-type]
+
+
 def choose(spots: Sequence[LabelSpot], camera: Any, selected: str | None = None,
-           reserved_spots: Sequence[tuple[str, Sequence[float]]] = (), limit: int = MAX_LABELS) -> list[tuple[int, Rect]]:
+           reserved_spots: Sequence[Any] = (), limit: int = MAX_LABELS,
+           markers: Sequence[Sequence[float]] = (), rank: Sequence[int] | None = None) -> list[tuple[int, Rect]]:
     """Which labels a camera shows: ``(index into spots, screen box [px])``, most important first.
 
     ``camera`` has viser's ``wxyz``, ``position``, ``fov``, ``image_width`` and ``image_height``;
-    ``selected`` is the selected object's id (its label first); ``reserved_spots`` are other labels
-    ``(text, anchor)`` (e.g. the robot's) that object labels must leave free.
+    ``selected`` is the selected object's id (its label first); ``reserved_spots`` are labels every tab shows
+    (:class:`FixedLabel`, or ``(text, anchor point)`` with a bottom-centre anchor: the robot's) and
+    ``markers`` world points (goal markers) that the chosen labels must leave free; ``rank`` orders the spots
+    after the selected one (lower first; default all equal), then the nearest first.
     """
     W, H = float(camera.image_width), float(camera.image_height)
     if W <= 0 or H <= 0:
@@ -132,37 +172,103 @@ def choose(spots: Sequence[LabelSpot], camera: Any, selected: str | None = None,
             rects.append(None)
             depth.append(math.inf)
             continue
-        rects.append(label_rect(s.text, p[0], p[1], scale))
+        rects.append(label_rect(s.text, p[0], p[1], scale, s.anchor, s.font_scale))
         depth.append(p[2])
     reserved = []
-    for text, anchor in reserved_spots:
-        p = project(*pose, anchor)
+    for r in map(_as_fixed, reserved_spots):
+        p = project(*pose, r.position)
         if p is not None:
-            reserved.append(label_rect(text, p[0], p[1], scale))
+            reserved.append(label_rect(r.text, p[0], p[1], scale, r.anchor, r.font_scale))
+    half = MARKER_PX * scale / 2
+    for m in markers:
+        p = project(*pose, m)
+        if p is not None:
+            reserved.append((p[0] - half, p[1] - half, p[0] + half, p[1] + half))
+    ranks = list(rank) if rank is not None else [0] * len(spots)
     order = sorted(range(len(spots)), key=lambda i: (0 if selected is not None and selected in spots[i].ids else 1,
-                                                     depth[i]))
+                                                     ranks[i], depth[i]))
     keep = declutter(rects, order, reserved, limit, GAP_PX * scale)
     return [(i, rects[i]) for i in keep]  # type: ignore[misc]
 
 
+def _quat_rotate(wxyz: Sequence[float], p: np.ndarray) -> np.ndarray:
+    w, x, y, z = (float(v) for v in wxyz)
+    R = np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+                  [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+                  [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]])
+    return R @ p
+
+
+def fixed_labels(server: Any, skip: str = "/labels/") -> list[FixedLabel]:
+    """The labels every tab of ``server`` shows now (server-wide label nodes, visible with all their parents),
+    each with its world anchor point [m] (its position through its parents' poses); per-tab nodes under
+    ``skip`` are not included. Read from viser's own node table; empty if it cannot be read."""
+    from viser._scene_handles import LabelHandle
+
+    nodes: dict[str, Any] = {}
+    for _ in range(3):  # another thread adding a node meanwhile: read again
+        try:
+            nodes = dict(server.scene._handle_from_node_name)
+            break
+        except (RuntimeError, AttributeError):
+            nodes = {}
+    out = []
+    for name, h in nodes.items():
+        if not isinstance(h, LabelHandle) or name.startswith(skip):
+            continue
+        try:
+            if not h.visible:
+                continue
+            p = np.asarray(h.position, dtype=np.float64)
+            parent, shown = name.rsplit("/", 1)[0], True
+            while parent:
+                frame = nodes.get(parent)
+                if frame is not None:
+                    if not frame.visible:
+                        shown = False
+                        break
+                    p = _quat_rotate(frame.wxyz, p) + np.asarray(frame.position, dtype=np.float64)
+                parent = parent.rsplit("/", 1)[0]
+            if shown:
+                out.append(FixedLabel(str(h.text), (float(p[0]), float(p[1]), float(p[2])), str(h.anchor),
+                                      float(h.font_screen_scale)))
+        except Exception:  # noqa: BLE001 - a node removed meanwhile: not drawn any more
+            continue
+    return out
+
+
+_boards: "weakref.WeakValueDictionary[int, ClientLabels]" = weakref.WeakValueDictionary()
+
+
+def board_for(server: Any) -> "ClientLabels | None":
+    """The decluttered labels of ``server`` (the objects view makes them), or ``None`` when it has none."""
+    return _boards.get(id(server))
+
+
 class ClientLabels:
-    """The object labels of every tab of a viser server, decluttered per tab.
+    """The decluttered labels of every tab of a viser server (one per server: :func:`board_for` finds it).
 
     Args:
         server: The viser server.
         selected: Returns the selected object's id, or ``None``.
-        reserved: Returns other labels ``(text, anchor world [m])`` object labels must leave free.
+        reserved: Returns more labels ``(text, anchor world [m])`` the others must leave free (beside the
+            server-wide ones, which :func:`fixed_labels` finds by itself).
     """
 
     def __init__(self, server: Any, selected: Callable[[], str | None],
-                 reserved: Callable[[], Sequence[tuple[str, Sequence[float]]]] = lambda: ()) -> None:
+                 reserved: Callable[[], Sequence[Any]] = lambda: ()) -> None:
+        from console.views.refresher import Refresher
+
         self._server = server
         self._selected = selected
         self._reserved = reserved
         self._lock = threading.RLock()
-        self._spots: list[LabelSpot] = []
+        self._layers: dict[str, list[LabelSpot]] = {name: [] for name in LAYERS}
+        self._markers: dict[str, list[tuple[float, float, float]]] = {}
         self._enabled = True
         self._tabs: dict[int, dict[str, Any]] = {}  # client id -> {"client", "handles", "shown"}
+        self._later = Refresher(self.refresh_all, "labels")  # moved(): one coalesced re-choice off the caller
+        _boards[id(server)] = self
         server.on_client_connect(self._connect)
         server.on_client_disconnect(lambda client: self._drop(client.client_id))
         for client in server.get_clients().values():
@@ -179,6 +285,9 @@ class ClientLabels:
         with self._lock:
             self._tabs.pop(client_id, None)
 
+    def _all(self) -> list[tuple[str, LabelSpot]]:
+        return [(layer, s) for layer, spots in self._layers.items() for s in spots]
+
     def _rebuild(self, client_id: int) -> None:
         tab = self._tabs.get(client_id)
         if tab is None:
@@ -189,25 +298,61 @@ class ClientLabels:
             except Exception:  # noqa: BLE001 - a tab that went away: nothing left to remove
                 pass
         client = tab["client"]
-        tab["handles"] = [client.scene.add_label(f"/labels/{n}", s.text, position=s.position, anchor="bottom-center",
-                                                 font_screen_scale=FONT_SCREEN_SCALE, visible=False)
-                          for n, s in enumerate(self._spots)]
+        counts: dict[str, int] = {}
+        handles = []
+        for layer, s in self._all():
+            n = counts[layer] = counts.get(layer, -1) + 1
+            name = f"/labels/{n}" if layer == "objects" else f"/labels/{layer}/{n}"
+            handles.append(client.scene.add_label(name, s.text, position=s.position, anchor=s.anchor,
+                                                  font_screen_scale=s.font_scale, visible=False))
+        tab["handles"] = handles
         tab["shown"] = []
         self.refresh(client_id)
 
-    # --- what the session says ----------------------------------------------------------------------
-    def set_spots(self, spots: Sequence[LabelSpot]) -> None:
-        """Replace the labels (a new scene) in every tab."""
+    # --- what the views say -------------------------------------------------------------------------
+    def spots(self, layer: str = "objects") -> list[LabelSpot]:
+        """The labels of ``layer`` (shown or not)."""
         with self._lock:
-            self._spots = list(spots)
+            return list(self._layers.get(layer, []))
+
+    def set_spots(self, spots: Sequence[LabelSpot]) -> None:
+        """Replace the object labels (a new scene) in every tab."""
+        self.set_layer("objects", spots)
+
+    def set_layer(self, layer: str, spots: Sequence[LabelSpot]) -> None:
+        """Replace the labels of ``layer`` (one of :data:`LAYERS`) in every tab (nothing when unchanged)."""
+        if layer not in LAYERS:
+            raise ValueError(f"layer: must be one of {', '.join(LAYERS)}, got {layer!r}")
+        with self._lock:
+            if list(spots) == self._layers[layer]:
+                return
+            self._layers[layer] = list(spots)
             for cid in list(self._tabs):
                 self._rebuild(cid)
 
+    def set_markers(self, name: str, points: Sequence[Sequence[float]]) -> None:
+        """World points [m] (goal markers) labels leave free, under ``name``; re-chosen at once in every tab."""
+        pts = [tuple(float(v) for v in p) for p in points]
+        with self._lock:
+            if self._markers.get(name, []) == pts:
+                return
+            self._markers[name] = pts  # type: ignore[assignment]
+        self.moved()
+
     def set_enabled(self, enabled: bool) -> None:
-        """Show (decluttered) or hide every object label."""
+        """Show (decluttered) or hide every object label (the paths' labels stay)."""
         with self._lock:
             self._enabled = bool(enabled)
             self.refresh_all()
+
+    def moved(self) -> None:
+        """Something every tab shows moved (the robot, a server-wide label): choose again in every tab, on the
+        labels' own worker (returns at once; a burst of calls costs one re-choice)."""
+        self._later.poke()
+
+    def close(self) -> None:
+        """Stop the worker of :meth:`moved`."""
+        self._later.close()
 
     def refresh_all(self) -> None:
         """Choose again in every tab (the selection or the robot moved)."""
@@ -221,10 +366,18 @@ class ClientLabels:
             tab = self._tabs.get(client_id)
             if tab is None:
                 return
+            layered = self._all() if self._enabled else [(la, s) for la, s in self._all() if la != "objects"]
+            index = {id(s): i for i, (_, s) in enumerate(self._all())}
             chosen: list[tuple[int, Rect]] = []
-            if self._enabled and self._spots:
+            if layered:
                 try:
-                    chosen = choose(self._spots, tab["client"].camera, self._selected(), self._reserved())
+                    spots = [s for _, s in layered]
+                    rank = [LAYERS.index(la) for la, _ in layered]
+                    reserved = list(fixed_labels(self._server)) + list(self._reserved())
+                    markers = [m for pts in self._markers.values() for m in pts]
+                    picked = choose(spots, tab["client"].camera, self._selected(), reserved, markers=markers,
+                                    rank=rank)
+                    chosen = [(index[id(spots[i])], rect) for i, rect in picked]
                 except Exception:  # noqa: BLE001 - no camera state from the tab yet: show none until it moves
                     chosen = []
             keep = {i for i, _ in chosen}
@@ -232,15 +385,20 @@ class ClientLabels:
                 want = i in keep
                 if bool(h.visible) != want:
                     h.visible = want
-            tab["shown"] = [(self._spots[i].text, rect) for i, rect in chosen]
+            all_spots = self._all()
+            tab["shown"] = [(all_spots[i][1].text, rect) for i, rect in chosen]
+            tab["layers"] = [all_spots[i][0] for i, _ in chosen]
 
-    def shown(self, client_id: int | None = None) -> list[tuple[str, Rect]]:
-        """The labels a tab shows now, ``(text, screen box [px])`` (the first tab when ``None``; tests)."""
+    def shown(self, client_id: int | None = None, layer: str | None = None) -> list[tuple[str, Rect]]:
+        """The labels a tab shows now, ``(text, screen box [px])`` (the first tab when ``None``; only ``layer``'s
+        when given; tests)."""
         with self._lock:
             if not self._tabs:
                 return []
             tab = self._tabs[client_id] if client_id is not None else next(iter(self._tabs.values()))
-            return list(tab["shown"])
+            pairs = list(zip(tab["shown"], tab.get("layers", [])))
+            return [s for s, la in pairs if layer is None or la == layer]
 
 
-__all__ = ["ClientLabels", "LabelSpot", "choose", "declutter", "label_rect", "overlaps", "project", "MAX_LABELS"]
+__all__ = ["ClientLabels", "FixedLabel", "LAYERS", "LabelSpot", "MAX_LABELS", "board_for", "choose", "declutter",
+           "fixed_labels", "label_rect", "overlaps", "project"]

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import html
 import logging
+import math
 import threading
 import time
 from typing import Any, Callable
@@ -25,6 +26,7 @@ from planner.mission import Mission, SegmentKind
 
 from console.session import operator_state as rules
 from console.views.client_notice import tell
+from console.views.object_labels import LabelSpot, board_for
 from console.views.picking import SELECT_MODIFIER, click_intent, drop_lines, looks_down, top_view, typed_goal
 from console.session.session import MISSION, ROUTE, RUN, SETTINGS, Session, SessionError
 from console.wording import kind_text, plural
@@ -156,6 +158,7 @@ class PathsView:
             tell(client, "No goal there", str(exc), "yellow", 7.0)
             return False
         self.show_goal_fields(goal)
+        planning(client, goal)
         res = self._session.add_goal(goal)
         if not res.ok:
             tell(client, "Goal not reachable", res.message, "yellow", 8.0)
@@ -185,6 +188,7 @@ class PathsView:
         except SessionError as exc:
             tell(client, "No goal there", str(exc), "yellow", 7.0)
             return False
+        planning(client, goal)
         res = self._session.add_goal(goal)
         if not res.ok:
             tell(client, "Goal not reachable", res.message, "yellow", 8.0)
@@ -301,6 +305,9 @@ class PathsView:
                 "/paths/candidate_goal", radius=0.08, color=CANDIDATE_RGB, position=(g[0], g[1], g[2] + LIFT),
                 cast_shadow=False))
             self._route_md.content = self._route_text(r)
+            board = board_for(self._server)
+            if board is not None:  # labels leave the start and goal markers free
+                board.set_markers("route", [r.start, *r.goals] + ([g] if g is not None else []))
 
     @staticmethod
     def _route_text(r: Any) -> str:
@@ -331,18 +338,48 @@ class PathsView:
                 self._lines(f"mission_{kind.value}", arr, KIND_RGB[kind], 0.06)
             for key in [k for k in self._handles if k.startswith("spot_")]:
                 self._put(key, None)
-            for i, s in enumerate(segments):
-                if s.kind in (SegmentKind.TAKEOFF, SegmentKind.LAND):
-                    x, y, z = s.spot
-                    text = f"{i + 1}. {'take-off' if s.kind is SegmentKind.TAKEOFF else 'land'}"
-                    self._put(f"spot_{i}", lambda i=i, x=x, y=y, z=z, text=text: sc.add_label(
-                        f"/paths/spot_{i}", text, position=(x, y, z + 0.05), anchor="top-center",
-                        font_screen_scale=0.75))
+            spots = spot_labels(segments)
+            board = board_for(self._server)
+            if board is not None:  # per tab, decluttered with the objects' labels, clear of the robot's
+                board.set_layer("paths", spots)
+                return
+            for i, s in enumerate(spots):
+                self._put(f"spot_{i}", lambda i=i, s=s: sc.add_label(
+                    f"/paths/spot_{i}", s.text, position=s.position, anchor=s.anchor, font_screen_scale=s.font_scale))
 
     def drawn(self) -> list[str]:
         """Keys of the path nodes currently drawn (for tests)."""
         with self._lock:
             return sorted(self._handles)
+
+
+SPOT_MERGE_M = 0.3
+"""Take-off and landing spots closer than this [m] share one label ("1. take-off · 5. land")."""
+
+
+def spot_labels(segments: Any) -> list[LabelSpot]:
+    """The mission's take-off and landing spot labels ("2. take-off", "4. land"; world [m], hung below the
+    spot), spots closer than :data:`SPOT_MERGE_M` sharing one label."""
+    out: list[tuple[list[str], tuple[float, float, float]]] = []
+    for i, s in enumerate(segments):
+        if s.kind not in (SegmentKind.TAKEOFF, SegmentKind.LAND):
+            continue
+        x, y, z = (float(v) for v in s.spot)
+        text = f"{i + 1}. {'take-off' if s.kind is SegmentKind.TAKEOFF else 'land'}"
+        near = next((o for o in out if math.dist(o[1], (x, y, z + 0.05)) < SPOT_MERGE_M), None)
+        if near is not None:
+            near[0].append(text)
+        else:
+            out.append(([text], (x, y, z + 0.05)))
+    return [LabelSpot(" · ".join(texts), p, (), "top-center", 0.75) for texts, p in out]
+
+
+def planning(client: Any, goal: Any) -> None:
+    """Say at once, in ``client``'s tab, that a goal (world [m]) is being planned: the first plan after a
+    start can wait for the planner's kernels (:mod:`console.session.planner_warmup`), and a click must never
+    look ignored. The answer (candidate or refusal) replaces this notice (same subject)."""
+    tell(client, "Planning", f"a path to ({goal[0]:.2f}, {goal[1]:.2f}, {goal[2]:.2f}) m…", "blue", 30.0,
+         about="goal")
 
 
 def _click_choice(click_to_goal: bool) -> str:

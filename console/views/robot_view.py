@@ -27,6 +27,7 @@ import trimesh
 import viser
 
 from console.views.client_notice import tell
+from console.views.object_labels import board_for
 from console.views.page_a11y import hint_spans
 from console.views.robot_messages import MessageShelf
 from console.session.button_rules import hover_text
@@ -44,6 +45,7 @@ LEG_RGB = (230, 120, 30)
 CAMERA_RGB = (20, 20, 24)
 STALE_RGB = (150, 150, 156)  # the whole twin while its pose is stale
 MIN_INTERVAL = 0.05  # at most 20 pose updates per second [s]
+LABEL_MOVE_M = 0.05  # the robot moved this far [m]: the other labels choose again around its label
 
 
 def _colored(mesh: trimesh.Trimesh, rgb: tuple[int, int, int]) -> trimesh.Trimesh:
@@ -215,6 +217,7 @@ class RobotView:
         self._drawn_key: tuple[Any, ...] = ()  # what the operator must see at once (no throttle) when it changes
         self._label = server.scene.add_label("/robot/label", "robot", position=(0.0, 0.0, 0.55),
                                              anchor="bottom-center", font_screen_scale=0.8)
+        self._label_key: tuple[str, str, tuple[float, ...]] | None = None  # the label's text, status, place
         session.subscribe(self._on_event)
         if session.robot is not None:
             self.show(session.robot)
@@ -318,9 +321,24 @@ class RobotView:
                 self._twin.visible = status == "known"
                 self._stale_twin.visible = status == "stale"
                 self._frame.visible = True
-            self._label.text = (f"robot · {mode_text(r.mode)}" + ("" if r.healthy else " · LINK LOST")
-                                + (" · POSITION STALE" if status == "stale" else ""))
+            text = (f"robot · {mode_text(r.mode)}" + ("" if r.healthy else " · LINK LOST")
+                    + (" · POSITION STALE" if status == "stale" else ""))
+            self._label.text = text
+            self._labels_follow(text, status, r.pose.translation)
             self._status.content = status_text(r, self._link_name, self._shelf.current(r.messages))
+
+    def _labels_follow(self, text: str, status: str, where: Any) -> None:
+        """The robot's label moved (more than :data:`LABEL_MOVE_M`), changed its text or was hidden: the
+        decluttered labels of every tab choose again, so none is drawn under it (console.views.object_labels)."""
+        board = board_for(self._server)
+        if board is None:
+            return
+        p = tuple(float(v) for v in where)
+        last = self._label_key
+        if (last is None or last[:2] != (text, status)
+                or math.dist(last[2], p) > LABEL_MOVE_M):  # type: ignore[arg-type]
+            self._label_key = (text, status, p)
+            board.moved()
 
     @property
     def twin_shown(self) -> str:

@@ -212,11 +212,11 @@ def test_status_and_mission_buttons_stay_in_sight_and_the_view_fits(console: Con
         # object labels: fewer than the groups, none overlapping (the tab's own choice for its view)
         labels = app.views["objects"].labels
         assert wait_until(lambda: len(labels.shown(client.client_id)) >= 3, 30), labels.shown(client.client_id)
-        shown = labels.shown(client.client_id)
-        assert len(shown) < len(labels._spots), (len(shown), len(labels._spots))  # some left out: declutter works
+        shown = labels.shown(client.client_id, layer="objects")
+        assert len(shown) < len(labels.spots()), (len(shown), len(labels.spots()))  # some left out: declutter works
         for (ta, a), (tb, b) in itertools.combinations(shown, 2):
             assert not overlaps(a, b, gap=0.0), (ta, a, tb, b)
-        print(f"\n{width}x{height}: {len(shown)} of {len(labels._spots)} object labels shown, none overlapping")
+        print(f"\n{width}x{height}: {len(shown)} of {len(labels.spots())} object labels shown, none overlapping")
 
         # free cells: off, one tick under Layers shows them
         grid = app.views["grid"]

@@ -87,3 +87,55 @@ def test_the_selected_objects_label_always_shows_and_labels_leave_the_robots_fre
 
 def test_a_tab_without_a_camera_yet_shows_none() -> None:
     assert choose(crowd(), Cam(np.zeros(3), np.array([1.0, 0, 0, 0]), 0.0, 0, 0)) == []
+
+
+# --- every label in the declutter: the robot's, the paths', the goal markers ------------------------------
+def test_anchors_place_the_box_where_viser_draws_it() -> None:
+    below = label_rect("1. take-off", 100.0, 50.0, anchor="top-center", font_scale=0.75)
+    above = label_rect("1. take-off", 100.0, 50.0, anchor="bottom-center", font_scale=0.75)
+    assert below[1] == pytest.approx(50.0) and above[3] == pytest.approx(50.0)  # hung below / standing on the point
+    assert below[0] + below[2] == pytest.approx(200.0)  # centred
+    left = label_rect("x", 100.0, 50.0, anchor="top-left")
+    assert left[0] == pytest.approx(100.0) and left[1] == pytest.approx(50.0)
+
+
+def test_labels_every_tab_shows_are_found_where_they_are_now_and_others_leave_them_free() -> None:
+    import viser
+
+    from console.views.object_labels import ClientLabels, FixedLabel, board_for, fixed_labels
+
+    server = viser.ViserServer(port=0, verbose=False)
+    try:
+        robot = server.scene.add_frame("/robot", position=(2.4, 4.2, 0.0), wxyz=(0.0, 0.0, 0.0, 1.0), show_axes=False)
+        server.scene.add_label("/robot/label", "robot · walking", position=(0.0, 0.0, 0.55), anchor="bottom-center",
+                               font_screen_scale=0.8)
+        server.scene.add_label("/search/viewpoint_why", "next viewpoint: gain 3.1 m³", position=(1.0, 2.0, 0.35))
+        found = {f.text: f for f in fixed_labels(server)}
+        assert found["robot · walking"].position == pytest.approx((2.4, 4.2, 0.55))  # through its parent frame
+        assert found["next viewpoint: gain 3.1 m³"].anchor == "top-left"
+        robot.visible = False  # a robot whose position is unknown: its label is not drawn, not reserved
+        assert "robot · walking" not in {f.text for f in fixed_labels(server)}
+
+        board = ClientLabels(server, lambda: None)
+        assert board_for(server) is board
+        spots = crowd()
+        cam = look((2.5, -3.0, 4.0), (2.4, 4.2, 0.5))
+        free = choose(spots, cam)
+        robot_label = FixedLabel("robot · walking", (2.4, 4.2, 0.55))
+        around = choose(spots, cam, reserved_spots=[robot_label])
+        u, v, _ = project(cam.wxyz, cam.position, cam.fov, cam.image_width, cam.image_height, robot_label.position)
+        box = label_rect(robot_label.text, u, v)
+        assert any(overlaps(r, box, gap=0.0) for _, r in free)  # without it, a label would be drawn under the robot's
+        assert all(not overlaps(r, box, gap=0.0) for _, r in around)
+        goal = spots[0].position
+        gu, gv, _ = project(cam.wxyz, cam.position, cam.fov, cam.image_width, cam.image_height, goal)
+        clear = choose(spots, cam, markers=[goal])
+        assert all(not (r[0] - 9 <= gu <= r[2] + 9 and r[1] - 9 <= gv <= r[3] + 9) for _, r in clear)  # marker left free
+        path = LabelSpot("2. take-off · 5. land", (2.4, 4.3, 0.05), (), "top-center", 0.75)
+        first = choose([*spots, path], cam, rank=[1] * len(spots) + [0])
+        assert first[0][0] == len(spots)  # the paths' label before the objects'
+        with pytest.raises(ValueError, match="layer: must be one of paths, objects"):
+            board.set_layer("search", [path])
+        board.close()
+    finally:
+        server.stop()
