@@ -40,6 +40,7 @@ from console.link.sim_camera import visible_objects
 from console.link.sim_config import DEFAULT_INTRINSICS, DEFAULT_MOUNT, SimConfig
 from console.link.sim_contact import BodyContact
 from console.session.known_space_state import BODY_HEIGHT, NEAR_FREE, grid_for, near_free
+from console.session.search_finish import is_contact, look_beside, repeats
 from console.session.search_types import CONFIRM_CAPTURES
 from pipeline.camera.geometry import Intrinsics, Pose, camera_pose_in_world
 from pipeline.mapping.known_space import KnownSpace
@@ -96,6 +97,9 @@ class Outcome:
     collisions: int = 0
     moves_refused: int = 0
     wall_s: float = 0.0
+    contacts: list[dict] = field(default_factory=list)  # what each collision touched (:meth:`SimSearch.diagnose`)
+    target_views: dict = field(default_factory=lambda: {"mapped": 0, "missed": 0, "too_near": 0})
+    """Captures in which the target covered enough pixels: mapped, dropped as a missed detection, too near."""
 
 
 class SimSearch:
@@ -126,6 +130,7 @@ class SimSearch:
         self.keep_looked = looked
         self.looked: np.ndarray | None = None
         self.visited: list[tuple[float, float, float]] = []
+        self.views: list[tuple[tuple[float, float, float], float]] = []  # (camera position, heading) per capture
         self._seen: dict[str, list[Any]] = {}  # id -> [true object, sum of noisy xy, sum of yaw offsets, captures]
         self._contact = BodyContact(room.objects, SimConfig.body_radius, SimConfig.body_height)
         truth = true_grid(room)
@@ -134,6 +139,8 @@ class SimSearch:
         self.out = Outcome(room.name, "", "")
         self.steps: list[str] = []
         self._grids: dict[tuple[str, int], PlanningGrid] = {}
+        self.confirmed_from: list[tuple[float, float, float]] = []  # spots a confirming capture was taken from
+        self.contact_routes: list[tuple[tuple[float, ...], tuple[float, ...]]] = []  # (start, goal) that hit
 
     # --- the map ------------------------------------------------------------------------------------
     @staticmethod
@@ -188,12 +195,19 @@ class SimSearch:
         self.known = near_free(up.space.with_free_body(at, MORPHOGEAR.radius, BODY_HEIGHT), at,
                                max(MORPHOGEAR.radius, NEAR_FREE), BODY_HEIGHT)
         self.visited.append(self.pos)
+        self.views.append(((float(cam.translation[0]), float(cam.translation[1]), float(cam.translation[2])), self.yaw))
         truth = {o.id: o for o in self.room.objects}
         for v in visible_objects(r, self.min_pixels):
-            if v.id not in truth or self.rng.random() < self.miss:
+            if v.id not in truth:
+                continue
+            tgt = v.id == self.room.target_id
+            if self.rng.random() < self.miss:
+                self.out.target_views["missed"] += tgt
                 continue
             if float(np.median(depth[r.instances == v.index])) < MIN_RANGE:
+                self.out.target_views["too_near"] += tgt
                 continue
+            self.out.target_views["mapped"] += tgt
             o = truth[v.id]
             dx, dy = self.rng.normal(0.0, POS_SIGMA, 2)
             rec = self._seen.setdefault(o.id, [o, np.zeros(2), 0.0, 0])
@@ -231,6 +245,7 @@ class SimSearch:
                 p = a + (b - a) * i / k
                 if self._contact.blocked(tuple(prev), tuple(p)) is not None:
                     self.out.collisions += 1
+                    self.out.contacts.append(self.diagnose(p, goal))
                     self.steps.append(f"contact at ({p[0]:.2f}, {p[1]:.2f}, {p[2]:.2f}) on the way to {goal} ({policy})")
                     self.pos = (float(prev[0]), float(prev[1]), float(prev[2]))
                     return f"contact with a true object at ({p[0]:.2f}, {p[1]:.2f}, {p[2]:.2f})"
@@ -256,6 +271,44 @@ class SimSearch:
             self.pos = (float(b[0]), float(b[1]), float(b[2]))
         return None
 
+    def diagnose(self, p: np.ndarray, goal: tuple[float, float, float]) -> dict:
+        """What the body at ``p`` (world [m]) touched and what the map knew of it: the true object, its
+        footprint's distance to the body's axis [m], whether it was mapped (and how far off [m]), and the
+        known-space states of its cells (``unknown``, ``free``, ``occupied`` counts)."""
+        from planner.object_goal import footprint_distance
+
+        xy = np.array([[float(p[0]), float(p[1])]])
+        z = float(p[2])
+        best, bd = None, math.inf
+        for o in self.room.objects:
+            lo, hi = o.position[2] - o.size[1] / 2, o.position[2] + o.size[1] / 2
+            if z >= hi or z + SimConfig.body_height <= lo:
+                continue
+            d = float(footprint_distance(o, xy)[0])
+            if d < bd:
+                best, bd = o, d
+        info: dict = {"at": [round(float(v), 3) for v in p], "goal": [round(float(v), 3) for v in goal],
+                      "object": best.id if best else None, "label": best.label if best else None,
+                      "distance": round(bd, 3), "captures": self.out.captures}
+        if best is not None:
+            rec = self._seen.get(best.id)
+            info["mapped"] = rec is not None
+            if rec is not None:
+                info["mapped_off"] = round(math.dist(rec[1] / rec[3], best.position[:2]), 3)
+            mapped = next((m for m in self.objects() if m.id == best.id), None)
+            if mapped is not None:
+                info["mapped_distance"] = round(float(footprint_distance(mapped, xy)[0]), 3)
+            ws = self.ws
+            i0 = ws.cell_of((best.position[0], best.position[1], max(best.position[2], ws.floor)))
+            state = self.known.state()
+            if i0 is not None:
+                r = int(math.ceil(max(best.size[0], best.size[2]) / 2 / ws.resolution))
+                k1 = max(1, int(math.ceil((best.position[2] + best.size[1] / 2) / ws.resolution)))
+                box = state[max(0, i0[0] - r):i0[0] + r + 1, max(0, i0[1] - r):i0[1] + r + 1, :k1]
+                info["cells"] = {"unknown": int((box == 0).sum()), "free": int((box == 1).sum()),
+                                 "occupied": int((box == 2).sum())}
+        return info
+
     # --- the loop (console.session.search.SearchJob._loop) --------------------------------------------
     def run(self) -> Outcome:
         t0 = time.perf_counter()
@@ -272,6 +325,7 @@ class SimSearch:
         return out
 
     def _loop(self) -> str:
+        """The console's loop (:meth:`console.session.search.SearchJob._loop`), step for step."""
         out = self.out
         self.capture()
         while True:
@@ -282,11 +336,14 @@ class SimSearch:
                     return self._finish(tid)
                 if out.captures >= self.budget:
                     return "budget used (target seen once, not confirmed)"
-                o = next(o for o in self.objects() if o.id == tid)
-                if math.dist(self.pos[:2], o.position[:2]) > 0.3:
-                    self.turn(heading_to(self.pos, o.position))
-                self.capture()
-                continue
+                if not any(math.dist(self.pos[:2], p[:2]) < 0.5 for p in self.confirmed_from):
+                    o = next(o for o in self.objects() if o.id == tid)
+                    if math.dist(self.pos[:2], o.position[:2]) > 0.3:
+                        self.turn(heading_to(self.pos, o.position))
+                    self.confirmed_from.append(self.pos)
+                    self.capture()
+                    continue
+                self.steps.append(f"{out.captures}: {tid} seen once; the confirming capture from here missed it")
             if out.captures >= self.budget:
                 return "not found: budget used"
             t0 = time.perf_counter()
@@ -301,29 +358,56 @@ class SimSearch:
                                                         and here[2] < 0.1):
                 why = self.move(vp.goal, policy)  # a refused or stopped move: capture where the robot is
                 if why is not None:
+                    if is_contact(why):
+                        self.contact_routes.append((here, tuple(vp.goal)))
                     self.steps.append(f"move not done: {why}")
             self.turn(vp.yaw)
             self.capture()
 
     def _finish(self, tid: str) -> str:
-        policy = "closed"
-        for _ in range(3):
-            grid = self.grid(policy)
+        """The console's last approach (:meth:`console.session.search_finish.SearchFinish._finish`): beside
+        the target over seen space only; none reachable: look to open the floor beside it
+        (:func:`console.session.search_finish.look_beside`) while the budget lasts, then *found, not
+        reached*; a move that stopped: capture and plan again, never the same route twice."""
+        looks: list[tuple[tuple[float, ...], float]] = []  # the looks taken here (never taken twice)
+        for _ in range(self.budget + 4):
+            grid = self.grid("closed")
             here = self.here()
+            scene = Scene(objects=tuple(self.objects()))
             try:
-                _, app = goal_beside(Scene(objects=tuple(self.objects())), grid, tid, here, Route(grid, here))
+                _, app = goal_beside(scene, grid, tid, here, Route(grid, here))
             except ObjectGoalError as exc:
-                if policy != "allow":
-                    policy = "allow"
-                    continue
-                return f"found but cannot reach it: {exc}"
+                if self.out.captures >= self.budget:
+                    return f"found, not reached: no seen-free spot beside it is reachable ({exc})"
+                look, none = look_beside(scene, grid, self.grid("allow"), tid, here, None, self.views + looks)
+                if look is None:
+                    return f"found, not reached: no seen-free spot beside it is reachable ({exc}); {none}"
+                looks.append((tuple(look.eye), float(look.yaw)))
+                self.steps.append(f"{self.out.captures}: no seen-free spot beside {tid}: looking from {look.why}")
+                if math.dist(here, look.goal) > 0.2:
+                    why = self.move(tuple(float(v) for v in look.goal), "closed")
+                    if why is not None:
+                        if is_contact(why):
+                            self.contact_routes.append((here, tuple(float(v) for v in look.goal)))
+                        self.steps.append(f"move to the look not done: {why}")
+                self.turn(look.yaw)
+                self.capture()
+                continue
             if math.dist(here[:2], app.goal[:2]) < 0.2 and self.pos[2] < 0.1:
                 self.out.found = True
                 return "found"
-            self.steps.append(f"going beside {tid} at {app.goal} ({policy})")
-            if self.move(tuple(float(v) for v in app.goal), policy) is None:
+            goal = tuple(float(v) for v in app.goal)
+            if repeats(here, goal, self.contact_routes):
+                return "found, not reached: the route beside it ended in contact before (not repeated)"
+            self.steps.append(f"going beside {tid} at {goal}")
+            why = self.move(goal, "closed")
+            if why is None:
                 self.out.found = True
                 return "found"
+            if is_contact(why):
+                self.contact_routes.append((here, goal))
+            self.steps.append(f"the move beside {tid} did not end there: {why}")
+            self.capture()
         return "found but the move beside it failed"
 
 

@@ -3,15 +3,16 @@
 - ``search``: the product's choice, the console's own
   :func:`console.session.search_choose.choose_viewpoint` (on a view of the simulated search as its
   session): :func:`planner.search_viewpoints.score_viewpoints` over seen-free space (its gain at
-  least :data:`~console.session.search_types.GAIN_MIN`), else over unknown space too (the route may
-  cross it); the cells earlier captures had in view that stayed unknown count no more.
+  least :data:`~console.session.search_types.GAIN_MIN`; never over unknown space); the cells earlier
+  captures had in view that stayed unknown count no more; a viewpoint whose route ended in contact
+  is not tried again from the same spot (:func:`console.session.search_finish.untried`).
 - ``frontier``: nearest frontier on the floor only (:func:`planner.search_baselines.nearest_frontier_ground`).
 - ``random``: random reachable seen-free viewpoints (:func:`planner.search_baselines.random_viewpoint`).
 - ``manual``: the paper's manual strategy (:func:`planner.search_baselines.farthest_seen_free`):
   capture, go to the seen-free point farthest from the start, capture again (and on, as long as the
   budget lasts).
 
-All plan on the map built from the captures (unknown space closed, except the product's fallback).
+All plan on the map built from the captures with unknown space closed (as the console's search).
 """
 
 from __future__ import annotations
@@ -20,6 +21,7 @@ from typing import Callable
 
 from bench.search_sim import SimSearch
 from console.session.search_choose import GridCache, choose_viewpoint
+from console.session.search_finish import untried
 from pipeline.scene import Scene
 from planner.grid import CostWeights
 from planner.robot_model import MORPHOGEAR
@@ -53,9 +55,10 @@ class SessionView:
 def product(sim: SimSearch) -> tuple[Viewpoint, str] | None:
     """The console's own choice (:func:`console.session.search_choose.choose_viewpoint`)."""
     choice = choose_viewpoint(SessionView(sim), sim.here(), sim.target_height, sim.looked, GridCache())
-    if choice.viewpoint is None:
+    vp = untried(choice, sim.pos, sim.contact_routes)  # as the console: a route that ended in contact is not repeated
+    if vp is None:
         return None
-    return choice.viewpoint, "allow" if choice.unknown else "closed"
+    return vp, "allow" if choice.unknown else "closed"
 
 
 def frontier(sim: SimSearch) -> tuple[Viewpoint, str] | None:

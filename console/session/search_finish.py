@@ -1,10 +1,13 @@
 """The search's last approach and its retries (mixed into :class:`console.session.search.SearchJob`).
 
 :meth:`SearchFinish._finish` goes beside the found target over seen space only (unknown space
-closed: the search never plans through space no capture has seen). A move that ends in a contact
-with something the map did not show is counted (``contacts`` in the result), followed by a capture
-and a new plan from where the robot stopped, and never repeated from the same spot to the same goal
-(:func:`repeats`, :func:`untried`). World frame (z up) [m].
+closed: the search never plans through space no capture has seen). When no seen-free spot beside it
+can be reached yet (the floor round it not seen: a target seen over a line of boxes, from the air),
+it looks to open that floor as Go look does (:func:`look_beside`: go to a seen-free spot that sees the
+approach spot's unseen cells, face it, capture) and plans again, as long as the capture budget
+lasts. A move that ends in a contact with something the map did not show is counted (``contacts``
+in the result), followed by a capture and a new plan from where the robot stopped, and never
+repeated from the same spot to the same goal (:func:`repeats`, :func:`untried`). World frame (z up) [m].
 """
 
 from __future__ import annotations
@@ -12,11 +15,13 @@ from __future__ import annotations
 import math
 from typing import Any, Sequence
 
-from planner.mission import heading_to
+from planner.grid import CostWeights, PlanningGrid
 from planner.object_goal import ObjectGoalError, goal_beside
 from planner.route import Route
 from planner.search_viewpoints import Viewpoint
+from pipeline.scene import Scene
 
+from console.session.go_look import looked_from
 from console.session.search_moves import BATTERY, PAUSED, STOPPED
 
 SAME = 0.3
@@ -47,6 +52,26 @@ def untried(choice: Any, here: Sequence[float], hit: Routes) -> Viewpoint | None
     return None
 
 
+def look_beside(scene: Scene, closed: PlanningGrid, allow: PlanningGrid, obj_id: str, here: Sequence[float],
+                weights: CostWeights | None, avoid: Sequence[Any] = ()) -> tuple[Any, str]:
+    """The next look that opens the floor beside the found object ``obj_id`` when no seen-free spot
+    beside it can be reached: the approach spot it would have with unknown space allowed (``allow``,
+    only to know *where* to look: no route goes there) and Go look's next look towards it
+    (:meth:`planner.route.Route.look_for` on the ``closed`` grid: a seen-free spot reachable over seen
+    space, facing the spot); ``avoid``: ``(camera position [m], heading [rad])`` of earlier captures.
+    ``(look, "")``, or ``(None, why there is none)``. World frame [m]."""
+    weights = weights if weights is not None else CostWeights()
+    try:
+        _, app = goal_beside(scene, allow, obj_id, here, Route(allow, here, weights))
+    except ObjectGoalError as exc:
+        return None, f"not even through unseen space: {exc}"
+    look = Route(closed, here, weights).look_for(app.goal, avoid=avoid)
+    if look is None:
+        return None, (f"no reachable seen-free spot sees the floor at ({app.goal[0]:.2f}, {app.goal[1]:.2f}) m "
+                      "beside it")
+    return look, ""
+
+
 class SearchFinish:
     """Mixin: the search's last approach (see the module docstring). Uses the job's ``result``, ``config``,
     ``_session``, ``_grids``, ``_contact_routes``, ``_go``, ``_turn``, ``_capture``, ``_pos``, ``_step``,
@@ -55,16 +80,18 @@ class SearchFinish:
     def _finish(self, obj: Any) -> str:
         """Go beside the found target over seen space only (never through space no capture has seen).
 
-        When no seen-free spot beside it is reachable, face it and capture once more from where the
-        robot is (a reachable seen-free spot) and plan again; when still none is, end *found, not
-        reached* with where and why. A move that stops (a contact, a refusal) is followed by a capture
-        and a new plan from where the robot is, never the same route again.
+        When no seen-free spot beside it is reachable, look to open the floor beside it
+        (:func:`look_beside`: go to the look's seen-free spot, face the approach spot, capture) and plan
+        again, while the capture budget lasts; when no look is left, end *found, not reached* with
+        where and why. A move that stops (a contact, a refusal) is followed by a capture and a new plan
+        from where the robot is, never the same route again.
         """
         r = self.result
         assert r is not None
         s = self._session
-        looked_again = False
-        for _ in range(4):
+        budget = self.config.max_captures if self.config else 0
+        looks: list[tuple[tuple[float, ...], float]] = []  # the looks taken here (never taken twice)
+        for _ in range(budget + 4):
             if not self._wait_paused():
                 return STOPPED
             here = self._pos()
@@ -74,15 +101,32 @@ class SearchFinish:
                 _, app = goal_beside(s.scene, grid, obj.id, here, Route(grid, here, s.weights))
             except ObjectGoalError as exc:
                 where = f"{obj.id} at ({obj.position[0]:.2f}, {obj.position[1]:.2f}) m"
-                if looked_again or r.captures >= (self.config.max_captures if self.config else 0):
+                if r.captures >= budget:
                     return f"found, not reached: {where}: no seen-free spot beside it is reachable ({exc})"
-                looked_again = True
-                self._step("move", f"no seen-free spot beside {where} is reachable ({exc}): one more look towards it",
+                look, none = look_beside(s.scene, grid, self._grids.grid(s, "allow"), obj.id, here, s.weights,
+                                         looked_from(s) + looks)
+                if look is None:
+                    return f"found, not reached: {where}: no seen-free spot beside it is reachable ({exc}); {none}"
+                self._step("move", f"no seen-free spot beside {where} is reachable ({exc}): looking from {look.why}",
                            level="warning")
-                if math.dist(here[:2], obj.position[:2]) > 0.3 and not self._turn(heading_to(here, obj.position)) \
-                        and (self._pause.is_set() or self._stop.is_set()):
+                looks.append((tuple(look.eye), float(look.yaw)))
+                if math.dist(here, look.goal) > 0.2:
+                    why = self._go(tuple(float(v) for v in look.goal), f"a look beside {obj.id}")
+                    if why == STOPPED or self._stop.is_set():
+                        return STOPPED
+                    if why == BATTERY:
+                        return self._battery_end() or "battery: the console's battery rule ended the move"
+                    if why == PAUSED:
+                        continue
+                    if is_contact(why):
+                        r.contacts += 1
+                        self._contact_routes.append((here, tuple(float(v) for v in look.goal)))
+                    if why is not None:
+                        self._step("move", f"the move to the look did not end there: {why}; capturing here",
+                                   level="warning")
+                if not self._turn(look.yaw) and (self._pause.is_set() or self._stop.is_set()):
                     continue
-                self._capture(f"looking towards {obj.id} for a way beside it")
+                self._capture(f"looking at the floor beside {obj.id}")
                 continue
             if math.dist(here[:2], app.goal[:2]) < 0.2 and here[2] < 0.1:
                 r.found = True
@@ -109,4 +153,4 @@ class SearchFinish:
         return "found but the move beside it failed"
 
 
-__all__ = ["SAME", "SearchFinish", "is_contact", "repeats", "untried"]
+__all__ = ["SAME", "SearchFinish", "is_contact", "look_beside", "repeats", "untried"]
