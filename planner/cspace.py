@@ -1,16 +1,23 @@
 """Configuration-space helpers of the planning grid: distances from cell centres to oriented boxes,
-cube-distance dilation of obstacle cells, floating objects.
+cube-distance dilation of obstacle cells, floating objects, the workspace's edges.
 
 World frame (z up) [m]. A cell obstacle is the cell's cube; the distance from a cell centre to
 another cell's cube is ``resolution * sqrt(sum(max(|d| - 1/2, 0)^2))`` for the index offset ``d``,
 so :func:`dilate` closes exactly the cells whose centre lies within ``radius`` of an obstacle cell
 (its surface). Object boxes use their exact oriented box (:func:`box_distance`).
+
+Space outside the workspace is closed (nothing there was ever mapped): its faces are obstacles like
+any other, and the robot keeps its radius from them (:func:`edge_closed`, :func:`edge_gaps`): in plan
+from the walls ``x = min/max``, ``y = min/max`` (walking and flying), and in the air from the top
+``z = max`` by its flying radius or its height, whichever is larger (the body reaches ``height``
+above its origin). The floor is no edge: the robot stands on it. The faces are exact (the
+operator's bounds, not a mapped estimate), so no danger band is added beyond them.
 """
 
 from __future__ import annotations
 
 import math
-from typing import Sequence
+from typing import Any, Sequence
 
 import numpy as np
 from scipy import ndimage
@@ -131,4 +138,62 @@ def floating_objects(objects: Sequence[SceneObject], floor: float, tol: float = 
     return out
 
 
-__all__ = ["FLOAT_TOL", "box_distance", "cube_ball", "dilate", "floating_objects", "object_distances"]
+EDGE_TOL = 1e-9
+"""A cell is closed when its gap to an edge is at most the robot's need plus this [m] (the same
+comparison as the clearance to objects)."""
+
+
+def _top_need(robot: Any) -> float:
+    """How far [m] the flying body reaches above its origin: its flying radius or its height."""
+    return max(float(robot.flying_radius), float(robot.height))
+
+
+def edge_gaps(lo: Sequence[float], hi: Sequence[float], point: Sequence[float], ground: bool,
+              robot: Any) -> list[tuple[float, float, str]]:
+    """The gaps between a robot at ``point`` (world [m]) and each face of the workspace ``lo..hi``
+    [m], nearest first, as ``(gap, need, face)``: ``gap`` [m] from the point to the face, ``need``
+    [m] the least gap the robot's body needs, ``face`` its name (``edge x = 5.00``, ``top z = 3.00``).
+
+    ``ground``: the robot walks there (its footprint ``robot.radius`` in plan; the top face counts
+    the floor-to-top height against ``robot.height``); else it flies (``robot.flying_radius`` in
+    plan, :func:`_top_need` below the top). The floor is no face."""
+    p = [float(v) for v in point]
+    r = float(robot.radius if ground else robot.flying_radius)
+    out = []
+    for a, axis in ((0, "x"), (1, "y")):
+        out.append((p[a] - float(lo[a]), r, f"edge {axis} = {float(lo[a]):.2f}"))
+        out.append((float(hi[a]) - p[a], r, f"edge {axis} = {float(hi[a]):.2f}"))
+    if ground:
+        out.append((float(hi[2]) - float(lo[2]), float(robot.height), f"top z = {float(hi[2]):.2f}"))
+    else:
+        out.append((float(hi[2]) - p[2], _top_need(robot), f"top z = {float(hi[2]):.2f}"))
+    out.sort(key=lambda g: g[0] - g[1])
+    return out
+
+
+def edge_blockers(lo: Sequence[float], hi: Sequence[float], point: Sequence[float], ground: bool,
+                  robot: Any) -> list[tuple[float, float, str]]:
+    """The faces of :func:`edge_gaps` the robot at ``point`` is too near (gap at most its need), the
+    tightest first; empty when it keeps its size from every face."""
+    return [g for g in edge_gaps(lo, hi, point, ground, robot) if g[0] <= g[1] + EDGE_TOL]
+
+
+def edge_closed(lo: Sequence[float], hi: Sequence[float], axes: tuple[np.ndarray, np.ndarray, np.ndarray],
+                robot: Any) -> np.ndarray:
+    """``bool [nx, ny, nz]``: the cells whose centre (``axes`` [m]) is too near a workspace face for
+    the robot (:func:`edge_blockers`, vectorised): layer 0 as walking, the others as flying."""
+    xs, ys, zs = (np.asarray(v, dtype=np.float64) for v in axes)
+    gx = np.minimum(xs - float(lo[0]), float(hi[0]) - xs)
+    gy = np.minimum(ys - float(lo[1]), float(hi[1]) - ys)
+    rf, rw = float(robot.flying_radius), float(robot.radius)
+    out = (gx[:, None, None] <= rf + EDGE_TOL) | (gy[None, :, None] <= rf + EDGE_TOL) | \
+        ((float(hi[2]) - zs)[None, None, :] <= _top_need(robot) + EDGE_TOL)
+    out = np.broadcast_to(out, (len(xs), len(ys), len(zs))).copy()
+    if len(zs):
+        out[:, :, 0] = (gx[:, None] <= rw + EDGE_TOL) | (gy[None, :] <= rw + EDGE_TOL) | \
+            (float(hi[2]) - float(lo[2]) <= float(robot.height) + EDGE_TOL)
+    return out
+
+
+__all__ = ["EDGE_TOL", "FLOAT_TOL", "box_distance", "cube_ball", "dilate", "edge_blockers", "edge_closed", "edge_gaps",
+           "floating_objects", "object_distances"]

@@ -7,10 +7,10 @@ ground layer (the robot walks there), ``k = 1`` the take-off/landing layer, ``k 
 
 :func:`build_grid` closes every cell the robot (:mod:`planner.robot_model`) cannot stand in:
 inside an object, within its radius of an obstacle (objects, unlabelled obstacles the depth saw,
-unknown space unless allowed, the column under a floating object), so no route passes closer than
-the radius; the danger band beyond it only makes cells dearer (Nav2's inflation layer). Known space
-comes from :mod:`pipeline.mapping.known_space` (read through :class:`KnownSpaceLike`); a scene
-without it is fully known.
+unknown space unless allowed, the column under a floating object, the space outside the workspace),
+so no route passes closer than the radius; the danger band beyond it only makes cells dearer (Nav2's
+inflation layer). Known space comes from :mod:`pipeline.mapping.known_space` (read through
+:class:`KnownSpaceLike`); a scene without it is fully known.
 """
 
 from __future__ import annotations
@@ -23,7 +23,7 @@ from typing import Any, Iterable, Mapping, Protocol, Sequence
 import numpy as np
 
 from pipeline.scene import Scene, SceneObject
-from planner.cspace import box_distance, dilate, floating_objects, object_distances
+from planner.cspace import box_distance, dilate, edge_closed, floating_objects, object_distances
 from planner.robot_model import MORPHOGEAR, RobotModel, RobotModelError
 
 
@@ -171,6 +171,7 @@ class Closed(IntEnum):
     UNKNOWN = 4  # not seen yet (unknown space closed)
     BENEATH = 5  # under a floating object, not seen free
     SURFACE = 6  # a depth surface a mapped object explains, outside its mapped box (the box may be off)
+    EDGE = 7  # within the robot's size of the workspace's edge (space outside it is closed: planner.cspace)
 
 
 UNKNOWN_POLICIES = ("closed", "allow")
@@ -233,6 +234,7 @@ class PlanningGrid:
     unlabelled: int = 0
     floating: tuple[str, ...] = ()
     build: Mapping[str, Any] | None = None  # build_grid's keyword arguments (for :meth:`without`)
+    edge: np.ndarray | None = None  # bool [nx, ny, nz]: too near the workspace's edge (cspace.edge_closed)
 
     def without(self, ids: Iterable[str]) -> "PlanningGrid":
         """The same grid built without the objects ``ids`` (same known space and rules)."""
@@ -406,7 +408,8 @@ def build_grid(
     within ``robot.radius`` horizontally of the cell's centre anywhere up to ``robot.height`` (the
     walking cylinder); **air layers** where an obstacle lies within ``robot.flying_radius`` in 3D.
     Cell obstacles are their cubes, objects their exact boxes. Cells within the further
-    ``danger_band`` are dangerous.
+    ``danger_band`` are dangerous. Cells too near the workspace's edge for the robot are closed
+    (:attr:`Closed.EDGE`, :func:`planner.cspace.edge_closed`).
     """
     rb = robot if robot is not None else None
     if rb is None:
@@ -473,6 +476,8 @@ def build_grid(
         if why is not Closed.OBJECT:  # an object above the floor cell only crowds the walking body: clearance
             reason[:, :, 0][mask[:, :, :kh].any(axis=2)] = why
         reason[mask] = why
+    edge = edge_closed(ws.min, ws.max, axes, rb)  # outside the workspace is closed: keep the robot's size from it
+    reason[edge & (reason == Closed.OPEN)] = Closed.EDGE
     state = np.zeros(ws.shape, dtype=np.uint8)
     state[danger] = CellState.DANGEROUS
     unseen = None
@@ -484,4 +489,4 @@ def build_grid(
     state[reason != Closed.OPEN] = CellState.OCCUPIED
     build = {"robot": rb, "known": known, "unknown": unknown, "danger_band": danger_band, "floating": floating}
     return PlanningGrid(ws, state, rb.radius, tuple(o.id for o in objs), owner, reason, unseen, rb, rule, tuple(objs),
-                        int(unl.sum()), tuple(floating_ids), build)
+                        int(unl.sum()), tuple(floating_ids), build, edge)

@@ -26,7 +26,7 @@ from typing import Any, Sequence
 import numpy as np
 
 from planner.astar import AStarSearcher, min_finite_cost
-from planner.cspace import box_distance
+from planner.cspace import box_distance, edge_blockers, edge_gaps
 from planner.grid import Closed, CostWeights, PlanningGrid
 from planner.mission import Mission, mission_from_cells
 from planner.goal_look import next_look
@@ -131,7 +131,7 @@ class Route:
             # cell closed for clearance stays closed: opening it would let the robot move closer to
             # an obstacle; only a robot already stranded (its own cell closed) may use those to leave
             body_free = np.isin(self._grid.reason, [int(Closed.UNKNOWN), int(Closed.BENEATH)])
-            own &= body_free
+            own &= body_free if self._grid.edge is None else body_free & ~self._grid.edge  # never nearer the edge
         if own.any():
             base = self._grid.cost(CostWeights(self._weights.ground, self._weights.takeoff, self._weights.flight,
                                                self._weights.danger, False))
@@ -243,6 +243,9 @@ class Route:
                 col = g.owner[c[0], c[1], :g.walk_layers()]
                 owner = next((g.owners[int(i)] for i in col if i >= 0), None)
             return f"{here} is inside an obstacle" + (f" ({owner})" if owner else ""), None
+        edge = self._edge_refusal(c, p, here)
+        if edge:
+            return edge, None
         if why is Closed.UNKNOWN:
             look = self.look_for(p)
             if look is not None and look.sees > 0:
@@ -292,6 +295,25 @@ class Route:
         if c[2] == 1:
             return f"{here} is in the take-off layer next to an obstacle; choose ground or a higher altitude", None
         return f"{here} cannot be used (closed cell)", None
+
+    def _edge_refusal(self, c: tuple[int, int, int], p: Sequence[float], here: str) -> str:
+        """The refusal for a cell too near the workspace's edge (the grid's rule: its centre within the
+        robot's radius of a wall, or its height of the top; :func:`planner.cspace.edge_blockers`), or "".
+        Names the face, the goal's and its cell centre's distance to it, and what the robot needs."""
+        g = self._grid
+        if g.edge is None or not g.edge[c]:
+            return ""
+        ws, ground = g.workspace, c[2] == 0
+        faces = edge_blockers(ws.min, ws.max, ws.centers(np.array([c]))[0], ground, g.robot)
+        if not faces:
+            return ""
+        gap, need, face = faces[0]
+        mine = {f: d for d, _, f in edge_gaps(ws.min, ws.max, [float(v) for v in p], ground, g.robot)}[face]
+        at = f"{mine:.2f} m from" if mine > 1e-9 else "at or beyond"
+        also = "".join(f"; also {d:.2f} m from {f}" for d, _, f in faces[1:])
+        size = "radius" if need in (g.robot.radius, g.robot.flying_radius) else "height"
+        return (f"{here} is {at} the workspace's {face} (its cell centre {_fmt(self._end_point(c))}: "
+                f"{gap:.2f} m{also}); the robot needs {need:.2f} m from it (its {size}): choose a point further in")
 
     def viewpoint_for(self, target: Sequence[float]) -> Vec3 | None:
         """A reachable seen-free spot (camera position, world [m]) from which ``target`` can be seen,

@@ -5,8 +5,9 @@ The robot lives in a hidden ground-truth world (default: the paper's room, see
 takes off, flies and lands at configurable speeds and rates, in simulated time that can run
 faster than the wall clock (``time_scale``). It rehearses like a real robot: a segment is never
 refused up front because of a hidden object; the robot moves until its body would touch one
-(:mod:`~console.link.sim_contact`) and stops there, failing the segment with "contact with an
-unmapped obstacle ahead at (x, y, z)" (never the object's name, class or extent). It never leaves
+(:mod:`~console.link.sim_contact`), or a wall or the ceiling of its ``room``, and stops there,
+failing the segment with "contact with an unmapped obstacle ahead at (x, y, z)" (never the object's
+name, class or extent). It never leaves
 the workspace (the safety net; checked up front). Its camera renders the hidden world from
 the robot's camera pose (RGB + ground-truth depth and instance masks), or serves real photos from
 a ``--captures`` folder.
@@ -61,7 +62,8 @@ class SimRobot(RobotLink):
         intrinsics: The camera's intrinsics (renders have this size).
         mount: The camera on the robot (robot body frame).
         captures: A folder of real photos to serve instead of renders (``--captures``).
-        room: Room shell drawn around the world ``(min, max)`` [m], ``None`` for none.
+        room: Room shell around the world ``(min, max)`` [m]: drawn in the renders, and its walls and
+            ceiling stop the body like an object (``None``: no shell, no walls).
         min_visible_pixels: Objects covering fewer pixels are left out of the ground truth's
             visible list (slivers behind other objects); their mask pixels stay in ``instances``.
         manual_clock: Do not run a clock thread: time only advances through :meth:`step`
@@ -82,7 +84,7 @@ class SimRobot(RobotLink):
         # a folder of photos, or any photo source with next() -> FolderPhoto (a live camera)
         self.captures = (captures if captures is None or hasattr(captures, "next")
                          else CapturesFolder(captures))
-        self._contact = BodyContact(self.world.objects, config.body_radius, config.body_height)
+        self._contact = BodyContact(self.world.objects, config.body_radius, config.body_height, room)
         x, y, z = (float(v) for v in start.translation)
         self._pos = np.array([x, y, max(z, config.workspace.floor)])
         self._yaw = start.yaw

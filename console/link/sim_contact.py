@@ -6,10 +6,16 @@ walks). A hidden object is its oriented box (``SceneObject`` centre, ``(w, h, l)
 along its yaw, ``w`` across it). The body *touches* an object when the object's footprint comes
 within ``radius`` of the origin in plan and their height ranges overlap.
 
-A motion stops where the body would touch an object it is not already touching, or would come
-closer to one it touches (so a robot that starts against an object can still move away). The
-contact is reported as a point on the object's surface: the robot "feels" it, as a bumper would;
-the object's name, class and extent are never reported (the operator has to map it).
+The room's shell (the world file's ``room``: walls at its ``x`` and ``y`` bounds, the ceiling at its
+top) is felt the same way: the body touches a wall when the wall comes within ``radius`` of the
+origin in plan, the ceiling when the body's top (origin + ``height``) reaches it; leaving the room
+is touching its wall. The floor is no contact (the robot stands on it).
+
+A motion stops where the body would touch an object or a wall it is not already touching, or would
+come closer to one it touches (so a robot that starts against one can still move away). The
+contact is reported as a point on the surface: the robot "feels" it, as a bumper would; the
+object's name, class and extent are never reported (the operator has to map it), and a wall is
+reported in the same words (a bumper cannot tell a wall from a box).
 
 Frames: world (z up) [m]; yaw about +z [rad].
 """
@@ -33,14 +39,24 @@ class BodyContact:
         objects: The hidden world's objects (world frame).
         radius: The body's radius in plan [m] (> 0).
         height: The body's height above its origin [m] (> 0).
+        room: The room's shell ``(min, max)`` corners [m] (world frame), or ``None`` (no walls).
     """
 
-    def __init__(self, objects: Sequence[SceneObject], radius: float, height: float) -> None:
+    def __init__(self, objects: Sequence[SceneObject], radius: float, height: float,
+                 room: tuple[Sequence[float], Sequence[float]] | None = None) -> None:
         for name, v in (("radius", radius), ("height", height)):
             if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
                 raise ValueError(f"body {name}: must be a positive number [m], got {v!r}")
         self.radius = float(radius)
         self.height = float(height)
+        self.room: tuple[np.ndarray, np.ndarray] | None = None
+        if room is not None:
+            lo, hi = (np.asarray(c, dtype=np.float64).reshape(-1) for c in room)
+            if lo.shape != (3,) or hi.shape != (3,) or not (np.all(np.isfinite(lo)) and np.all(np.isfinite(hi))):
+                raise ValueError(f"room: must be two corners of 3 finite numbers [m], got {room!r}")
+            if not np.all(hi > lo):
+                raise ValueError(f"room: max {tuple(hi)} must exceed min {tuple(lo)} on every axis")
+            self.room = (lo, hi)
         n = len(objects)
         self._centre = np.array([o.position for o in objects], dtype=np.float64).reshape(n, 3)
         size = np.array([o.size for o in objects], dtype=np.float64).reshape(n, 3)
@@ -70,22 +86,56 @@ class BodyContact:
         return (dist < self.radius - 1e-9) & overlap, dist, near
 
     def touches(self, p: Sequence[float]) -> bool:
-        """Whether the body at ``p`` (world frame [m]) touches any object."""
+        """Whether the body at ``p`` (world frame [m]) touches any object (walls: :meth:`touches_wall`)."""
         return bool(self._touching(p)[0].any()) if len(self._centre) else False
 
-    def blocked(self, here: Sequence[float], there: Sequence[float]) -> Vec3 | None:
-        """Where the body moving from ``here`` to ``there`` (a short step) would touch an object it
-        is not touching at ``here`` (or come closer to one it touches): the contact point on the
-        object's surface (world frame [m]), or ``None`` when the step is clear."""
-        if not len(self._centre):
+    def _wall_gaps(self, p: Sequence[float]) -> np.ndarray:
+        """Free space [m] between the body at ``p`` and each wall (x min, x max, y min, y max) and the
+        ceiling; negative: the body crosses it."""
+        assert self.room is not None
+        lo, hi = self.room
+        x, y, z = (float(v) for v in p[:3])
+        r = self.radius
+        return np.array([x - lo[0] - r, hi[0] - x - r, y - lo[1] - r, hi[1] - y - r, hi[2] - z - self.height])
+
+    def touches_wall(self, p: Sequence[float]) -> bool:
+        """Whether the body at ``p`` (world frame [m]) touches a wall or the ceiling of the room."""
+        return self.room is not None and bool(np.any(self._wall_gaps(p) < -1e-9))
+
+    def wall_blocked(self, here: Sequence[float], there: Sequence[float]) -> Vec3 | None:
+        """Where the body moving from ``here`` to ``there`` would touch a wall (or the ceiling) it is
+        not touching at ``here``, or come closer to one it touches: the point on the wall (world frame
+        [m]), or ``None``."""
+        if self.room is None:
             return None
+        gap, gap0 = self._wall_gaps(there), self._wall_gaps(here)
+        worse = (gap < -1e-9) & ((gap0 >= -1e-9) | (gap < gap0 - 1e-9))
+        if not worse.any():
+            return None
+        lo, hi = self.room
+        i = int(np.flatnonzero(worse)[np.argmin(gap[worse])])
+        x = min(max(float(there[0]), lo[0]), hi[0])
+        y = min(max(float(there[1]), lo[1]), hi[1])
+        zc = min(max(float(there[2]) + self.height / 2, lo[2]), hi[2])
+        if i < 2:
+            return (float(lo[0] if i == 0 else hi[0]), y, zc)
+        if i < 4:
+            return (x, float(lo[1] if i == 2 else hi[1]), zc)
+        return (x, y, float(hi[2]))
+
+    def blocked(self, here: Sequence[float], there: Sequence[float]) -> Vec3 | None:
+        """Where the body moving from ``here`` to ``there`` (a short step) would touch an object or a
+        wall it is not touching at ``here`` (or come closer to one it touches): the contact point on
+        the surface (world frame [m]), or ``None`` when the step is clear."""
+        if not len(self._centre):
+            return self.wall_blocked(here, there)
         hit, dist, near = self._touching(there)
         if not hit.any():
-            return None
+            return self.wall_blocked(here, there)
         was, dist0, _ = self._touching(here)
         worse = hit & (~was | (dist < dist0 - 1e-9))
         if not worse.any():
-            return None
+            return self.wall_blocked(here, there)
         i = int(np.flatnonzero(worse)[np.argmin(dist[worse])])
         zc = min(max(float(there[2]) + self.height / 2, float(self._zlo[i])), float(self._zhi[i]))
         return (float(near[i, 0]), float(near[i, 1]), zc)

@@ -141,7 +141,10 @@ def world_from_dict(data: Any, base: Path | None = None, body: SimConfig | None 
         if o.frame != "world":
             raise WorldError(f"scene.objects[{i}].frame: must be world, got {o.frame!r}")
     cfg = body or SimConfig()
-    contact = BodyContact(scene.objects, cfg.body_radius, cfg.body_height)
+    contact = BodyContact(scene.objects, cfg.body_radius, cfg.body_height, room)
+    if contact.touches_wall(pos):
+        raise WorldError(f"start.position: the robot's body ({cfg.body_radius:.2f} m radius) at ({pos[0]}, {pos[1]}) "
+                         "touches the room's wall: start it at least that far inside the room")
     if contact.touches(pos):
         near = min(scene.objects, key=lambda o: math.dist(o.position[:2], pos[:2]))
         raise WorldError(f"start.position: the robot's body ({cfg.body_radius:.2f} m radius) at ({pos[0]}, {pos[1]}) "

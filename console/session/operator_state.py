@@ -340,6 +340,8 @@ def landing_blocker(robot: RobotSnapshot, grid: PlanningGrid, forced: bool = Fal
         if grid.state_at(cell) is CellState.OCCUPIED:
             owner = grid.owner_of(cell)
             why = grid.reason_at(cell)
+            if why is Closed.EDGE:  # near the workspace's edge: going straight down brings it no nearer
+                continue
             if known and (why is Closed.UNKNOWN or (why is Closed.CLEARANCE and owner is None)):
                 if forced:
                     continue

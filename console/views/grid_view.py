@@ -6,7 +6,8 @@ one batched mesh so tens of thousands of cells stay fluid, sorted by why a cell 
 
 - occupied (red): obstacles only: inside a mapped object, a depth surface an object explains, or
   under a floating object (unlabelled obstacles are drawn magenta by the known-space view);
-- dangerous (yellow): the robot's clearance around an obstacle (closed) and the dearer band beyond it;
+- dangerous (yellow): the robot's clearance around an obstacle (closed) and the dearer band beyond it,
+  and the band along the workspace's edge the robot keeps its size from (:attr:`Closed.EDGE`);
 - free (blue, off by default: one click under Layers shows it);
 - unknown (translucent grey, off by default): cells closed only because no capture has seen them,
   and the clearance and band around unseen space (not around an obstacle).
@@ -87,7 +88,7 @@ def layer_mask(grid: PlanningGrid, name: str) -> np.ndarray:
         banded |= reason == Closed.CLEARANCE
         near = near_obstacles(grid)
         if name == "dangerous":
-            return banded & near
+            return (banded & near) | (reason == Closed.EDGE)  # and the robot's size along the workspace's edge
         return (reason == Closed.UNKNOWN) | (banded & ~near)
     if name == "occupied":
         if reason is None:

@@ -27,7 +27,8 @@ def test_axis_aligned_box_marks_exact_cells() -> None:
     ws = Workspace(resolution=0.25)
     # box spans x 1.0..2.0 (l along x), y 3.0..3.5, z 0..0.75 -> 4 x 2 x 3 cells
     g = build_grid([_box(1.5, 3.25, 0.5, 0.75, 1.0)], ws, margin=0.0)
-    occ = np.argwhere(g.state == CellState.OCCUPIED)
+    # away from the workspace's edge (its top: the robot's 0.45 m height even for a point robot)
+    occ = np.argwhere((g.state == CellState.OCCUPIED) & (g.reason != Closed.EDGE))
     assert len(occ) == 4 * 2 * 3
     assert occ[:, 0].min() == 4 and occ[:, 0].max() == 7
     assert occ[:, 1].min() == 12 and occ[:, 1].max() == 13
@@ -55,7 +56,7 @@ def test_radius_closes_a_shell_and_the_danger_band_lies_beyond() -> None:
     # could be routed 0.125 m from the box
     ws = Workspace(resolution=0.25)
     g = build_grid([_box(2.5, 4.0, 0.5, 0.5, 0.5)], ws, margin=0.3, danger_band=0.25)
-    occ = g.state == CellState.OCCUPIED
+    occ = (g.state == CellState.OCCUPIED) & (g.reason != Closed.EDGE)  # the box is 2 m from any edge
     assert int((g.reason == Closed.OBJECT).sum()) == 2 * 2 * 2
     # the box spans cells i 9..10, j 15..16, k 0..1; every cell centre within 0.3 m is closed:
     # 4 x 4 on the floor (walking cylinder), on the box's layer and on the layer above (0.125 m up)
@@ -83,9 +84,22 @@ def test_counts_and_costs() -> None:
     assert np.all(np.isinf(c2[:, :, 1][dan[:, :, 1]]))
 
 
-def test_empty_scene_is_all_free() -> None:
+def test_empty_scene_is_free_but_for_the_robots_size_from_the_edge() -> None:
+    # space outside the workspace is closed: the robot (0.35 m radius, 0.45 m high) keeps its size
+    # from the walls x = 0 / 5, y = 0 / 8 and, flying, from the top z = 3 (cell centres 0.125 m in:
+    # closed; 0.375 m in: open)
     g = build_grid([], Workspace())
-    assert g.counts()["free"] == 20 * 32 * 12
+    assert g.counts()["free"] == 18 * 30 * 10  # 18 x 30 columns: the floor and air layers 1..9
+    assert np.all(g.reason[g.state == CellState.OCCUPIED] == Closed.EDGE)
+    assert np.all(g.edge == (g.state == CellState.OCCUPIED))
+    assert g.state_at((0, 5, 0)) is CellState.OCCUPIED and g.state_at((1, 5, 0)) is CellState.FREE
+    assert g.state_at((19, 5, 4)) is CellState.OCCUPIED and g.state_at((18, 5, 4)) is CellState.FREE
+    assert g.state_at((5, 0, 4)) is CellState.OCCUPIED and g.state_at((5, 31, 0)) is CellState.OCCUPIED
+    # the top: centre 2.625 m is 0.375 m below 3 m, less than the 0.45 m height; 2.375 m is clear
+    assert g.state_at((5, 5, 10)) is CellState.OCCUPIED and g.state_at((5, 5, 9)) is CellState.FREE
+    # a point robot keeps nothing from the walls (its height still from the top)
+    p = build_grid([], Workspace(), margin=0.0)
+    assert p.state_at((0, 0, 0)) is CellState.FREE and p.state_at((0, 0, 9)) is CellState.FREE
 
 
 @pytest.mark.parametrize("kw", [dict(resolution=0.0), dict(max=(0.0, 8.0, 3.0)), dict(resolution=float("nan"))])

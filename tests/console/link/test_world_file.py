@@ -44,6 +44,8 @@ def test_the_shipped_examples_load_and_the_paper_room_is_the_built_in_one() -> N
     ({"start": {"position": [3.0, 9.0, 0.0]}}, r"^start\.position: .* is outside the bounds"),
     ({"start": {"position": [3.0, 0.7, 1.0]}}, r"^start\.position: z must be the floor"),
     ({"start": {"position": [3.0, 5.3, 0.0]}}, r"^start\.position: the robot's body .* touches robot_dog 'robot_dog-1'"),
+    ({"start": {"position": [5.9, 0.7, 0.0]}}, r"^start\.position: the robot's body \(0\.25 m radius\) at \(5\.9, 0\.7\) "
+                                               r"touches the room's wall"),
     ({"scene": 5}, r"^scene: must be a scene JSON object or the path"),
     ({"scene": {"version": 1, "objects": [{"id": "a", "label": "desk", "frame": "world", "position": [1, 1, "x"],
                                           "size": [1, 1, 1]}]}}, r"^scene\.objects\[0\]\.position"),

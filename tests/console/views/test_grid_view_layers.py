@@ -60,6 +60,8 @@ def test_red_means_obstacles_not_unknown_space(server: viser.ViserServer, captur
     clearance = int(np.count_nonzero(reason == Closed.CLEARANCE))
     dangerous = int(np.count_nonzero(grid.state == CellState.DANGEROUS))
     occupied = int(np.count_nonzero(grid.state == CellState.OCCUPIED))
+    edge = int(np.count_nonzero(reason == Closed.EDGE))  # the robot's size along the workspace's edge: yellow too
+    assert edge > 0
     assert unknown > obstacles > 0 and clearance > 0  # the capture left most of the room unseen
     assert occupied > obstacles + clearance
 
@@ -72,9 +74,9 @@ def test_red_means_obstacles_not_unknown_space(server: viser.ViserServer, captur
 
     view = GridView(server, captured)  # the height slider starts at the top: every cell is drawn
     assert view.visible_layers() == {"occupied": True, "dangerous": True, "free": False, "unknown": False}
-    drawn = _wait_for(view, {"occupied": obstacles, "dangerous": dangerous + clearance - around_unseen})
+    drawn = _wait_for(view, {"occupied": obstacles, "dangerous": dangerous + clearance - around_unseen + edge})
     assert drawn["occupied"] == obstacles, drawn
-    assert drawn["dangerous"] == dangerous + clearance - around_unseen, drawn
+    assert drawn["dangerous"] == dangerous + clearance - around_unseen + edge, drawn
     assert "unknown" not in drawn and "free" not in drawn  # off by default
     assert "free and unknown not drawn: tick <i>Free cells</i> / <i>Unknown cells</i> under Layers" \
         in view._counts.content  # the counts line says how to show them
