@@ -16,6 +16,9 @@ Per planner, counted over every (room, run, protocol, goal):
 - ``routes``: plans found; ``hit body`` / ``hit radius``: routes whose robot (a 0.25 m body, the
   simulator's; or the 0.35 m planning radius) overlaps a true object anywhere along the route
   (sampled every 5 cm; walking: a cylinder up to 0.45 m, flying: a sphere);
+- ``edge``: routes that bring the robot nearer the workspace's edge than its 0.35 m radius (walls
+  ``x = 0 / 5``, ``y = 0 / 8``; flying, the top less the robot's height); ``wall``: routes whose 0.25 m
+  body touches the room's shell (the paper room's walls are the workspace's ``x = 0`` and ``x = 5``);
 - ``unseen``: routes through cells no capture saw free (walking cells: the column up to the robot's
   height), and their metres;
 - ``refused: viewpoint / look around / other`` (the new planner's refusals);
@@ -134,6 +137,23 @@ def hits(room: Room, pts: np.ndarray, ground: np.ndarray, r: float) -> bool:
     return False
 
 
+def near_edge(pts: np.ndarray, ground: np.ndarray) -> bool:
+    """Whether the robot at any of ``pts`` (world [m]) is nearer the workspace's edge than its radius
+    (in plan), or flying, nearer its top than its height."""
+    lo, hi = np.asarray(WS.min), np.asarray(WS.max)
+    plan = np.minimum(pts[:, :2] - lo[:2], hi[:2] - pts[:, :2]).min(axis=1)
+    top = hi[2] - pts[:, 2]
+    return bool(np.any(plan < RADIUS - 1e-9) or np.any(top[~ground] < max(RADIUS, HEIGHT) - 1e-9))
+
+
+def hits_wall(pts: np.ndarray) -> bool:
+    """Whether the simulator's body (:data:`BODY` radius, :data:`HEIGHT` high) at any of ``pts``
+    touches the room's shell (its walls in plan, its ceiling)."""
+    lo, hi = np.asarray(ROOM_MIN), np.asarray(ROOM_MAX)
+    plan = np.minimum(pts[:, :2] - lo[:2], hi[:2] - pts[:, :2]).min(axis=1)
+    return bool(np.any(plan < BODY - 1e-9) or np.any(pts[:, 2] + HEIGHT > hi[2] + 1e-9))
+
+
 def unseen_metres(cells: np.ndarray, seen: np.ndarray) -> float:
     """Metres of moves ending in a cell not seen free (walking: its column up to the robot's height)."""
     kh = int(math.ceil(HEIGHT / WS.resolution))
@@ -149,6 +169,8 @@ class Tally:
     routes: int = 0
     hit_body: int = 0
     hit_radius: int = 0
+    near_edge: int = 0
+    hit_wall: int = 0
     unseen_routes: int = 0
     unseen_m: float = 0.0
     refused_viewpoint: int = 0
@@ -164,6 +186,8 @@ def _route_check(room: Room, grid: PlanningGrid, res, seen: np.ndarray, tl: "Tal
     dense, ground = densify(res.points(grid), res.cells)
     tl.hit_body += hits(room, dense, ground, BODY)
     tl.hit_radius += hits(room, dense, ground, RADIUS)
+    tl.near_edge += near_edge(dense, ground)
+    tl.hit_wall += hits_wall(dense)
     m = unseen_metres(res.cells, seen)
     tl.unseen_routes += m > 0
     tl.unseen_m += m
@@ -288,17 +312,17 @@ def main(argv: list[str] | None = None) -> int:
     print(f"{len(rooms)} rooms (the paper's + {args.rooms} random, seed {args.seed}), "
           f"{sum(len(r.goals) for r in rooms)} goals behind the line, workspace {WS.shape} at {WS.resolution} m")
     head = (f"{'protocol':8} {'run':7} {'planner':7} {'plans':>5} {'routes':>6} {'hit body':>8} {'hit radius':>10} "
-            f"{'unseen':>6} {'unseen m':>8} {'ref vp':>6} {'ref look':>8} {'ref other':>9} {'plan ms':>7} {'build ms':>8}")
+            f"{'edge':>4} {'wall':>4} {'unseen':>6} {'unseen m':>8} {'ref vp':>6} {'ref look':>8} {'ref other':>9} {'plan ms':>7} {'build ms':>8}")
     print(head)
     print("-" * len(head))
     for (proto, run), pair in tallies.items():
         for name, t in pair.items():
             print(f"{proto:8} {run:7} {name:7} {t.plans:5d} {t.routes:6d} {t.hit_body:8d} {t.hit_radius:10d} "
-                  f"{t.unseen_routes:6d} {t.unseen_m:8.1f} {t.refused_viewpoint:6d} {t.refused_look:8d} "
+                  f"{t.near_edge:4d} {t.hit_wall:4d} {t.unseen_routes:6d} {t.unseen_m:8.1f} {t.refused_viewpoint:6d} {t.refused_look:8d} "
                   f"{t.refused_other:9d} {np.median(t.plan_ms):7.2f} {np.median(t.build_ms):8.2f}")
     for run, t in follows.items():
         print(f"{'look+vp':8} {run:7} {'new':7} {t.plans:5d} {t.routes:6d} {t.hit_body:8d} {t.hit_radius:10d} "
-              f"{t.unseen_routes:6d} {t.unseen_m:8.1f} {t.refused_viewpoint:6d} {t.refused_look:8d} "
+              f"{t.near_edge:4d} {t.hit_wall:4d} {t.unseen_routes:6d} {t.unseen_m:8.1f} {t.refused_viewpoint:6d} {t.refused_look:8d} "
               f"{t.refused_other:9d}")
     allp = {n: [v for pair in tallies.values() for v in pair[n].plan_ms] for n in ("today", "new")}
     allb = {n: [v for pair in tallies.values() for v in pair[n].build_ms] for n in ("today", "new")}
@@ -315,6 +339,10 @@ def main(argv: list[str] | None = None) -> int:
     new_hits = sum(p["new"].hit_body for p in tallies.values()) + sum(t.hit_body for t in follows.values())
     new_close = sum(p["new"].hit_radius for p in tallies.values()) + sum(t.hit_radius for t in follows.values())
     new_unseen = sum(p["new"].unseen_m for p in tallies.values()) + sum(t.unseen_m for t in follows.values())
+    new_edge = sum(p["new"].near_edge for p in tallies.values()) + sum(t.near_edge for t in follows.values())
+    print(f"routes nearer the workspace's edge than the robot's radius: today "
+          f"{sum(p['today'].near_edge for p in tallies.values())}, new {new_edge} "
+          f"({'met' if new_edge == 0 else 'MISSED'}: 0)")
     print(f"targets: new planner 0 colliding routes (body contact: {new_hits}, "
           f"{'met' if new_hits == 0 else 'MISSED'}; {new_close} within the 0.35 m radius of a true object), "
           f"0 unseen metres ({new_unseen:.1f}, {'met' if new_unseen == 0 else 'MISSED'}); total {total:.0f} s")
