@@ -52,14 +52,17 @@ def _click(page: Any, name: str, done: Callable[[], bool], what: str, timeout: f
     from playwright.sync_api import Error
 
     deadline = time.monotonic() + timeout
+    errors: list[str] = []
     while not done():
-        assert time.monotonic() < deadline, f"timed out clicking {name!r} for {what}"
+        left = deadline - time.monotonic()
+        assert left > 0, f"timed out clicking {name!r} for {what}: {errors[-3:]}"
+        attempt = max(1000.0, min(20_000.0, 1000.0 * left))  # [ms] short tries: a re-drawn panel is found again
         try:
             b = page.get_by_role("button", name=name, exact=True).first
-            b.scroll_into_view_if_needed(timeout=LONG)
-            b.click(timeout=LONG)
-        except Error:  # detached or covered while re-drawn: find it again
-            pass
+            b.scroll_into_view_if_needed(timeout=attempt)
+            b.click(timeout=attempt)
+        except Error as exc:  # detached, hidden or covered while re-drawn: find it again
+            errors.append(str(exc).splitlines()[0][:300])
         wait_until(done, 10.0, 0.05)
 
 
