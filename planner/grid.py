@@ -53,6 +53,10 @@ class Workspace:
         for a in range(3):
             if not self.max[a] > self.min[a]:
                 raise GridError(f"workspace max {self.max} must exceed min {self.min} on every axis")
+        smallest = min(self.max[a] - self.min[a] for a in range(3))
+        if self.resolution > smallest:  # one cell wider than the room: its centre would lie outside it
+            raise GridError(f"resolution must be at most the workspace's smallest side ({smallest:g} m), "
+                            f"got {self.resolution:g} m")
         if np.prod(self.shape) > 400_000_000:
             raise GridError(f"grid {self.shape} has too many cells; use a coarser resolution")
 

@@ -74,6 +74,9 @@ def cmd_plan(args: argparse.Namespace) -> int:
         raise CliError(f"{args.scene}: {exc}") from None
     try:
         ws = Workspace(args.bounds[0], args.bounds[1], args.resolution)
+    except GridError as exc:  # the workspace is made of --bounds and --resolution: name them
+        raise CliError(f"--bounds / --resolution: {exc}") from None
+    try:
         weights = CostWeights(args.w_ground, args.w_takeoff, args.w_flight, args.w_danger)
         grid, rule_lines = plan_grid(args, scene, ws)
     except GridError as exc:

@@ -102,7 +102,8 @@ def test_empty_scene_is_free_but_for_the_robots_size_from_the_edge() -> None:
     assert p.state_at((0, 0, 0)) is CellState.FREE and p.state_at((0, 0, 9)) is CellState.FREE
 
 
-@pytest.mark.parametrize("kw", [dict(resolution=0.0), dict(max=(0.0, 8.0, 3.0)), dict(resolution=float("nan"))])
+@pytest.mark.parametrize("kw", [dict(resolution=0.0), dict(max=(0.0, 8.0, 3.0)), dict(resolution=float("nan")),
+                                dict(resolution=3.5)])
 def test_bad_workspace(kw) -> None:
     with pytest.raises(GridError):
         Workspace(**kw)

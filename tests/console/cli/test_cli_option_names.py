@@ -31,3 +31,17 @@ def test_plan_names_each_bad_option_once(capsys, tmp_path: Path, argv, words) ->
     option = words.split()[1].rstrip(":")
     assert err.count(f"{option}:") == 1, err  # named once
     assert not (tmp_path / "m.json").exists()
+
+
+def test_plan_refuses_a_cell_larger_than_the_room(capsys, tmp_path: Path) -> None:
+    """One cell wider than the workspace's smallest side would put the start's cell centre outside the room
+    (--resolution 100 planned from (50, 50, 0))."""
+    try:
+        code = main(["plan", str(SCENE), "--out", str(tmp_path / "m.json"), "--start", "1,1,0", "--goal", "3,3,0",
+                     "--resolution", "100"])
+    except SystemExit as ex:
+        code = ex.code
+    assert code == 2
+    err = capsys.readouterr().err
+    assert "--bounds / --resolution: resolution must be at most the workspace's smallest side (3 m), got 100 m" in err
+    assert "Traceback" not in err and not (tmp_path / "m.json").exists()
