@@ -32,3 +32,28 @@ def test_search_benchmark_two_rooms(tmp_path: Path) -> None:
         assert 1 <= rec["captures"] <= 6 and rec["path_m"] >= 0.0 and rec["reason"]
         assert rec["success"] <= rec["found"]  # success needs a found end
     assert sum(r["success"] for r in records) >= 1  # someone finds the dog in two findable rooms
+
+
+def test_the_simulated_search_plans_over_seen_space_only_and_looks_beside_a_target_seen_over_the_line() -> None:
+    """Room 23 of seed 19 (7.5 x 9 m, a line with two gaps, the dog in the far corner): confirmed
+    from the air with no seen-free floor beside it, the search looks to open that floor (the console's
+    search_finish.look_beside) and ends beside the dog; no move is ever planned with unknown space
+    allowed (the benchmark's old last approach fell back to that)."""
+    import numpy as np
+
+    sys.path.insert(0, str(ROOT))
+    from bench.search_rooms import random_search_room
+    from bench.search_sim import SimSearch
+    from bench.search_strategies import STRATEGIES
+    from console.link.render import SceneRenderer
+    from pipeline.scene import Scene
+
+    room = random_search_room(19, 23)
+    sim = SimSearch(room, SceneRenderer(Scene(objects=room.objects), room.shell), STRATEGIES["search"],
+                    np.random.default_rng([19, 24, 0, 0]), 0.0, 12, looked=True)
+    policies: list[str] = []
+    move = sim.move
+    sim.move = lambda goal, policy: policies.append(policy) or move(goal, policy)  # type: ignore[method-assign]
+    out = sim.run()
+    assert out.success and out.collisions == 0, (out.reason, sim.steps)
+    assert policies and set(policies) == {"closed"}
