@@ -236,25 +236,15 @@ def _cost(obs: SceneObject, r_obs: np.ndarray, obj: SceneObject, p_obj: np.ndarr
     points = [(np.asarray(obj.position), p_obj)]
     if obj.is_pinned:  # also where the operator's object was seen before it was pinned
         points += [(np.asarray(s.position), _cov(s)) for s in _history(obj, captures) if s.capture]
-    best, spread = math.inf, 0.0
+    best = math.inf
     for pos, cov in points:
         d = np.asarray(obs.position) - pos
-        m2 = float(d @ np.linalg.solve(cov + r_obs, d))
-        if m2 < best:
-            best, spread = m2, _log_spread(cov, r_obs)
+        best = min(best, float(d @ np.linalg.solve(cov + r_obs, d)))
     if best <= cfg.gate:
-        return best + spread
+        return best
     if vertical_overlap(obs, obj) >= cfg.min_vertical and footprint_overlap(obs, obj) >= cfg.min_overlap:
-        return cfg.gate + _log_spread(points[0][1], r_obs)
+        return cfg.gate
     return math.inf
-
-
-def _log_spread(p_obj: np.ndarray, r_obs: np.ndarray) -> float:
-    """``ln det(P + R) - ln det(R)`` (>= 0): how much the map object's own uncertainty widens the
-    pair's; added to the squared Mahalanobis distance it makes the cost the pair's negative
-    log-likelihood (up to the observation's constant), so a poorly known object (one cut view) does
-    not draw a good view away from the well-known object it lies on."""
-    return float(np.linalg.slogdet(p_obj + r_obs)[1] - np.linalg.slogdet(r_obs)[1])
 
 
 def _candidates(obs: Sequence[SceneObject], covs: Sequence[np.ndarray], objects: Sequence[SceneObject],
