@@ -21,7 +21,6 @@ from __future__ import annotations
 
 import logging
 import math
-import threading
 import time
 from dataclasses import dataclass, field
 from typing import Any, Sequence
@@ -30,6 +29,7 @@ from planner.goal_look import hidden_by, known_state
 from planner.mission import turn_segment
 from planner.route import Route
 
+from console.session.job_thread import JobThread
 from console.session.mapping_job import MappingJob
 from console.session.session import RUN, JobStatus, Session, SessionError
 
@@ -84,7 +84,7 @@ def looked_from(session: Session) -> list[tuple[tuple[float, float, float], floa
     return out
 
 
-class GoLookJob:
+class GoLookJob(JobThread):
     """Runs Go look in a worker thread (one at a time).
 
     Args:
@@ -95,34 +95,11 @@ class GoLookJob:
     """
 
     def __init__(self, session: Session, link: Any, mapping: MappingJob, runner: Any) -> None:
-        self._session, self._link, self._mapping, self._runner = session, link, mapping, runner
-        self._lock = threading.Lock()
-        self._thread: threading.Thread | None = None
-        self._ended = False  # the run said it ended (its thread may still be finishing)
-        self._pause = threading.Event()
-        self._stop = threading.Event()
+        super().__init__(session)
+        self._link, self._mapping, self._runner = link, mapping, runner
         self.outcome = GoLookOutcome()
 
-    # --- state / control ------------------------------------------------------------------------------
-    @property
-    def running(self) -> bool:
-        with self._lock:
-            # ended once it said so: its last event must already read 'not running' (the panels redraw on it)
-            return self._thread is not None and self._thread.is_alive() and not self._ended
-
-    @property
-    def paused(self) -> bool:
-        return self.running and self._pause.is_set()
-
-    def wait(self, timeout: float | None = None) -> bool:
-        """Wait for the look to end; ``True`` when none is running."""
-        with self._lock:
-            t = self._thread
-        if t is not None:
-            t.join(timeout)
-            return not t.is_alive()
-        return True
-
+    # --- control --------------------------------------------------------------------------------------
     def start(self, target: Sequence[float]) -> None:
         """Go look towards ``target`` (world ``(x, y)`` on the floor or ``(x, y, z)`` [m]); returns at once.
 
@@ -138,31 +115,19 @@ class GoLookJob:
             raise SessionError(f"go look: the goal must be finite numbers (x, y[, z]) [m], got {target!r}")
         if not ws.contains(t):
             raise SessionError(f"go look: the goal {_fmt(t)} is outside the workspace {_fmt(ws.min)}..{_fmt(ws.max)}")
-        if self.running:
-            raise SessionError("a look is already running: pause or stop it first")
-        if self._mapping.running:
-            raise SessionError("a capture is being mapped: wait for it")
-        if self._session.run.active:
-            raise SessionError("a mission is under way (running or paused): abort it before Go look")
-        st = self._link.latest_state() if self._link is not None else None
-        if st is None or not getattr(st, "link_ok", False):
-            raise SessionError("no state from the robot: is the link connected?")
+        self._robot_ready(self._link, self._mapping, "a look is already running: pause or stop it first", "Go look")
         goal = (t[0], t[1], t[2])
         with self._lock:
             if self.outcome.target != goal:
                 self.outcome = GoLookOutcome(target=goal)
-            self._pause.clear()
-            self._stop.clear()
-            self._ended = False
-            self._thread = threading.Thread(target=self._run, args=(goal,), name="go-look", daemon=True)
-            self._report(0.0, f"towards {_fmt(goal[:2])}: choosing where to look from")
-            self._thread.start()
+            self._launch(self._run, "go-look", (goal,),
+                         announce=lambda: self._report(0.0, f"towards {_fmt(goal[:2])}: choosing where to look from"))
 
     def pause(self) -> None:
         """Pause the move under way (the robot holds) and wait."""
         if not self.running:
             raise SessionError("no Go look is running")
-        self._pause.set()
+        self._request_pause()
         if self._session.run.state == "running" and self._runner is not None:
             try:
                 self._runner.pause()
@@ -174,7 +139,7 @@ class GoLookJob:
     def resume(self) -> None:
         if not self.paused:
             raise SessionError("no Go look is paused")
-        self._pause.clear()
+        self._request_resume()
         if self._session.run.state == "paused" and self._runner is not None:
             self._runner.resume()
 
@@ -182,7 +147,7 @@ class GoLookJob:
         """End the look; a move under way is aborted (the robot holds)."""
         if not self.running:
             return
-        self._stop.set()
+        self._request_stop()
         if self._session.run.active and self._runner is not None:
             try:
                 self._runner.abort()
@@ -194,9 +159,7 @@ class GoLookJob:
     # --- worker --------------------------------------------------------------------------------------
     def _report(self, fraction: float, message: str, running: bool = True, error: str | None = None) -> None:
         self.outcome.message = error or message
-        if not running:
-            self._ended = True
-        self._session.set_job(JobStatus(GO_LOOK, running, max(0.0, min(1.0, fraction)), message, error))
+        self._set_job(JobStatus(GO_LOOK, running, max(0.0, min(1.0, fraction)), message, error))
 
     def _hold(self) -> None:
         try:
@@ -287,11 +250,7 @@ class GoLookJob:
             return None
 
     def _wait_paused(self, where: str) -> bool:
-        if self._pause.is_set() and not self._stop.is_set():
-            self._report(0.5, f"paused while {where} (Resume carries on, Stop ends)")
-            while self._pause.is_set() and not self._stop.is_set():
-                time.sleep(0.05)
-        return not self._stop.is_set()
+        return self._wait_resumed(lambda: self._report(0.5, f"paused while {where} (Resume carries on, Stop ends)"))
 
     def _run(self, goal: tuple[float, float, float]) -> None:
         out = self.outcome

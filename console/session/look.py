@@ -18,12 +18,12 @@ from __future__ import annotations
 
 import logging
 import math
-import threading
 import time
 from typing import Any, Sequence
 
 from planner.mission import MissionError, heading_to, turn_segment
 
+from console.session.job_thread import JobThread
 from console.session.mapping_job import MappingJob
 from console.session.session import JobStatus, Session, SessionError
 
@@ -47,7 +47,7 @@ def _deg(yaw: float) -> int:
     return int(round(math.degrees(yaw))) % 360
 
 
-class LookJob:
+class LookJob(JobThread):
     """Runs Look around / Look at in a worker thread (one at a time).
 
     Args:
@@ -57,37 +57,11 @@ class LookJob:
     """
 
     def __init__(self, session: Session, link: Any, mapping: MappingJob) -> None:
-        self._session = session
+        super().__init__(session)
         self._link = link
         self._mapping = mapping
-        self._lock = threading.Lock()
-        self._thread: threading.Thread | None = None
-        self._ended = False  # the run said it ended (its thread may still be finishing)
-        self._pause = threading.Event()
-        self._stop = threading.Event()
-        self._wake = threading.Event()
         self._turning: Any = None  # the SegmentRun of a turn under way
         self.last_mapped: list[int] = []  # objects in the map after each capture of the last look (tests, reports)
-
-    # --- state ---------------------------------------------------------------------------------------
-    @property
-    def running(self) -> bool:
-        with self._lock:
-            # ended once it said so: its last event must already read 'not running' (the panels redraw on it)
-            return self._thread is not None and self._thread.is_alive() and not self._ended
-
-    @property
-    def paused(self) -> bool:
-        return self.running and self._pause.is_set()
-
-    def wait(self, timeout: float | None = None) -> bool:
-        """Wait for the look to end; ``True`` when none is running."""
-        with self._lock:
-            t = self._thread
-        if t is not None:
-            t.join(timeout)
-            return not t.is_alive()
-        return True
 
     # --- control -------------------------------------------------------------------------------------
     def look_around(self, headings: int = DEFAULT_HEADINGS) -> None:
@@ -121,55 +95,39 @@ class LookJob:
         """Hold the robot and wait (a turn under way stops where it is)."""
         if not self.running:
             raise SessionError("no look is running")
-        self._pause.set()
+        self._request_pause()
         self._hold()
 
     def resume(self) -> None:
         if not self.paused:
             raise SessionError("no look is paused")
-        self._pause.clear()
-        self._wake.set()
+        self._request_resume()
 
     def stop(self) -> None:
         """End the look; the robot holds."""
         if not self.running:
             return
-        self._stop.set()
-        self._wake.set()
+        self._request_stop()
         self._hold()
 
     # --- worker --------------------------------------------------------------------------------------
     def _ready(self) -> Any:
-        if self.running:
-            raise SessionError("a look is already running: pause or stop it first")
-        if self._mapping.running:
-            raise SessionError("a capture is being mapped: wait for it")
-        if self._session.run.active:
-            raise SessionError("a mission is under way (running or paused): abort it before looking around")
-        st = self._link.latest_state() if self._link is not None else None
-        if st is None or not getattr(st, "link_ok", False):
-            raise SessionError("no state from the robot: is the link connected?")
+        st = self._robot_ready(self._link, self._mapping, "a look is already running: pause or stop it first",
+                               "looking around")
         if not getattr(st, "position_valid", True):
             raise SessionError("the robot's position is unknown: it cannot turn to look yet")
         return st
 
     def _start(self, name: str, yaws: list[float]) -> None:
         with self._lock:
-            if self._thread is not None and self._thread.is_alive():
+            if self._alive():
                 raise SessionError("a look is already running: pause or stop it first")
-            self._pause.clear()
-            self._stop.clear()
-            self._wake.clear()
             self.last_mapped = []
-            self._ended = False
-            self._thread = threading.Thread(target=self._run, args=(name, yaws), name="look", daemon=True)
-            self._report(name, 0.0, f"starting ({len(yaws)} heading{'s' if len(yaws) > 1 else ''})")
-            self._thread.start()
+            self._launch(self._run, "look", (name, yaws), announce=lambda: self._report(
+                name, 0.0, f"starting ({len(yaws)} heading{'s' if len(yaws) > 1 else ''})"))
 
     def _report(self, name: str, fraction: float, message: str, running: bool = True, error: str | None = None) -> None:
-        if not running:
-            self._ended = True
-        self._session.set_job(JobStatus(name, running, max(0.0, min(1.0, fraction)), message, error))
+        self._set_job(JobStatus(name, running, max(0.0, min(1.0, fraction)), message, error))
 
     def _hold(self) -> None:
         try:
@@ -180,12 +138,8 @@ class LookJob:
 
     def _wait_if_paused(self, name: str, fraction: float, where: str) -> bool:
         """Wait while paused; ``False`` when stopped."""
-        if self._pause.is_set() and not self._stop.is_set():
-            self._report(name, fraction, f"paused at {where} (Resume continues, Stop ends)")
-            while self._pause.is_set() and not self._stop.is_set():
-                self._wake.wait(0.1)
-                self._wake.clear()
-        return not self._stop.is_set()
+        return self._wait_resumed(
+            lambda: self._report(name, fraction, f"paused at {where} (Resume continues, Stop ends)"))
 
     def _turn(self, yaw: float) -> str | None:
         """Turn to ``yaw``; ``None`` when done, else why not (``paused`` when paused)."""

@@ -27,6 +27,7 @@ from pipeline.mapping.map_fusion import fuse
 from pipeline.scene import Scene
 
 from console.link.base import CaptureResult
+from console.session.job_thread import BackgroundRun
 from console.session.model_preload import ModelPreload
 
 from console.session.session import CaptureRecord, Detection, JobStatus, Session, SessionError
@@ -87,7 +88,7 @@ def capture_id(shot: CaptureResult) -> str:
     return f"cap-{stem}-{uuid.uuid4().hex[:4]}" if stem else f"cap-{uuid.uuid4().hex[:8]}"
 
 
-class MappingJob:
+class MappingJob(BackgroundRun):
     """Runs :data:`TakePhoto` -> :class:`Perceiver` -> ``session.spawn`` in a worker thread.
 
     Args:
@@ -103,14 +104,13 @@ class MappingJob:
     def __init__(self, session: Session, take_photo: TakePhoto, perceiver: Perceiver,
                  preload: ModelPreload | None = None,
                  pair: Callable[[CaptureResult], CaptureResult] | None = None) -> None:
+        # re-entrant: start() reports 'starting' under it and the session's listeners read ``held`` then
+        super().__init__(threading.RLock())
         self._session = session
         self._take_photo = take_photo
         self._pair = pair
         self.perceiver = perceiver
         self.preload = preload
-        # re-entrant: start() reports 'starting' under it and the session's listeners read ``held`` then
-        self._lock = threading.RLock()
-        self._thread: threading.Thread | None = None
         self._held: tuple[Scene, str] | None = None
         self._job_name = JOB_NAME  # what the progress says runs (Look around runs captures under its own name)
 
@@ -147,30 +147,15 @@ class MappingJob:
         report = self._session.spawn(scene, origin=f"capture {cap_id}")
         return f"capture {cap_id}: {len(report.added)} new, {len(report.updated)} updated ({action})"
 
-    @property
-    def running(self) -> bool:
-        with self._lock:
-            return self._thread is not None and self._thread.is_alive()
-
     def start(self) -> bool:
         """Start a run in the background; ``False`` if one is already running."""
         with self._lock:
-            if self._thread is not None and self._thread.is_alive():
+            if self._alive():
                 return False
-            self._thread = threading.Thread(target=self.run, name="mapping-job", daemon=True)
             self._job_name = JOB_NAME
-            self._report(0.0, "starting")  # every tab sees the capture running from the click on
-            self._thread.start()
+            # every tab sees the capture running from the click on
+            self._launch(self.run, "mapping-job", announce=lambda: self._report(0.0, "starting"))
             return True
-
-    def wait(self, timeout: float | None = None) -> bool:
-        """Wait for the current run; ``True`` if none is running any more."""
-        with self._lock:
-            t = self._thread
-        if t is not None:
-            t.join(timeout)
-            return not t.is_alive()
-        return True
 
     def _report(self, fraction: float, message: str) -> None:
         self._session.set_job(JobStatus(self._job_name, True, max(0.0, min(1.0, fraction)), message))
@@ -179,7 +164,7 @@ class MappingJob:
         """One cycle in the calling thread as a step of another job (``name`` in the progress, e.g.
         ``Look around · heading 2/6 (150°)``); ``False`` at once when a capture is already running."""
         with self._lock:
-            if self._thread is not None and self._thread.is_alive():
+            if self._alive():
                 return False
             self._thread = threading.current_thread()
         try:

@@ -43,6 +43,7 @@ from planner.object_goal import ObjectGoalError, goal_beside
 from planner.route import Route
 from planner.search_viewpoints import Viewpoint, cells_in_view
 
+from console.session.job_thread import JobThread
 from console.session.mapping_job import MappingJob
 from console.session.operator_state import battery_level
 from console.session.search_choose import GridCache, choose_viewpoint
@@ -58,7 +59,7 @@ from console.session.session import RUN, JobStatus, Session, SessionError
 log = logging.getLogger(__name__)
 
 
-class SearchJob(SearchFinish, SearchMoves):
+class SearchJob(SearchFinish, SearchMoves, JobThread):
     """Runs a search in a worker thread.
 
     Args:
@@ -69,12 +70,8 @@ class SearchJob(SearchFinish, SearchMoves):
     """
 
     def __init__(self, session: Session, link: Any, mapping: MappingJob, runner: Any) -> None:
-        self._session, self._link, self._mapping, self._runner = session, link, mapping, runner
-        self._lock = threading.Lock()
-        self._thread: threading.Thread | None = None
-        self._ended = False  # the run said it ended (its thread may still be finishing)
-        self._pause = threading.Event()
-        self._stop = threading.Event()
+        super().__init__(session)
+        self._link, self._mapping, self._runner = link, mapping, runner
         self._approve = threading.Event()
         self._pause_why = ""
         self.config: SearchConfig | None = None
@@ -99,52 +96,22 @@ class SearchJob(SearchFinish, SearchMoves):
 
     # --- state / control ------------------------------------------------------------------------------
     @property
-    def running(self) -> bool:
-        with self._lock:
-            # ended once it said so: its last event must already read 'not running' (the panels redraw on it)
-            return self._thread is not None and self._thread.is_alive() and not self._ended
-
-    @property
-    def paused(self) -> bool:
-        return self.running and self._pause.is_set()
-
-    @property
     def pause_reason(self) -> str:
         """Why the search is paused (``""`` when it is not)."""
         return self._pause_why if self.paused else ""
 
-    def wait(self, timeout: float | None = None) -> bool:
-        with self._lock:
-            t = self._thread
-        if t is not None:
-            t.join(timeout)
-            return not t.is_alive()
-        return True
-
     def start(self, config: SearchConfig) -> None:
         """Start a search (returns at once). Raises :class:`SessionError` when one cannot start now."""
-        if self.running:
-            raise SessionError("a search is already running: stop it first")
-        if self._mapping.running:
-            raise SessionError("a capture is being mapped: wait for it")
-        if self._session.run.active:
-            raise SessionError("a mission is under way (running or paused): abort it before searching")
-        st = self._link.latest_state() if self._link is not None else None
-        if st is None or not getattr(st, "link_ok", False):
-            raise SessionError("no state from the robot: is the link connected?")
+        st = self._robot_ready(self._link, self._mapping, "a search is already running: stop it first", "searching")
         with self._lock:
             self.config, self.chosen, self.result, self.steps = config, None, None, []
             self.search_id = f"search-{uuid.uuid4().hex[:6]}"
-            self._pause.clear()
-            self._stop.clear()
             self._approve.clear()
             self._path, self._last_pos = 0.0, tuple(float(v) for v in st.position)
             self._looked = None
             self._t0 = time.monotonic()
             self._land_nearest(True)  # before the thread: its end turns it off
-            self._ended = False
-            self._thread = threading.Thread(target=self._run, name="search", daemon=True)
-            self._thread.start()
+            self._launch(self._run, "search")
 
     def pause(self) -> None:
         """Pause: the move under way ends where the robot is (it holds); Hold / Land here / Return are
@@ -155,7 +122,7 @@ class SearchJob(SearchFinish, SearchMoves):
 
     def _pause_for(self, why: str) -> None:
         self._pause_why = why
-        self._pause.set()
+        self._request_pause()
 
     def resume(self) -> None:
         """Resume a paused search; a move the mission panel paused goes on (the manager's Resume)."""
@@ -167,7 +134,7 @@ class SearchJob(SearchFinish, SearchMoves):
                 self._runner.resume()
             except Exception as exc:
                 raise SessionError(f"the paused move cannot go on: {exc}") from None
-        self._pause.clear()
+        self._request_resume()
 
     def approve(self) -> None:
         if not self.waiting_approval:
@@ -178,7 +145,7 @@ class SearchJob(SearchFinish, SearchMoves):
         """End the search (the move under way is aborted; the robot holds)."""
         if not self.running:
             return
-        self._stop.set()
+        self._request_stop()
 
     # --- reporting ------------------------------------------------------------------------------------
     def _name(self) -> str:
@@ -338,9 +305,8 @@ class SearchJob(SearchFinish, SearchMoves):
         text = (f"found {r.target_id} at {r.distance_to_target:.2f} m" if r.found and r.distance_to_target is not None
                 else r.reason)
         self._land_nearest(False)
-        self._ended = True
-        s.set_job(JobStatus(self._name(), False, 1.0, f"{text}: {r.captures} captures, {r.path_length:.1f} m, "
-                                                       f"{r.time:.0f} s"))
+        self._set_job(JobStatus(self._name(), False, 1.0, f"{text}: {r.captures} captures, {r.path_length:.1f} m, "
+                                                            f"{r.time:.0f} s"))
         s.notify(self._name(), f"{text} ({r.captures} captures, {r.path_length:.1f} m travelled)"
                  + (f"; left unseen: {r.left_unseen}" if r.left_unseen else ""), "success" if r.found else "warning")
         self._announce(result_event(self.search_id, r))
