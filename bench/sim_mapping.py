@@ -13,7 +13,7 @@ camera distance [%], the objects mapped outside the 5 x 8 x 3 m workspace and th
 length axis about world z, see :mod:`pipeline.scene`). ``--compare`` also maps without the yaw from
 depth points (``MapperConfig(yaw_from_depth=False)``: every object faces the camera).
 
-``--tour [--noise] [--seed N] [--extended]`` is the map-fusion benchmark of issue 12 (see :mod:`bench.sim_tour`):
+``--tour [--noise] [--seed N] [--extended] [--table SEEDS]`` is the map-fusion benchmark of issue 12 (see :mod:`bench.sim_tour`):
 the robot captures from :data:`bench.sim_tour.TOUR` (10 poses: the good ones plus a close-up of a desk
 and views with objects cut by the border) and the captures are folded into one map by
 :func:`pipeline.mapping.map_fusion.fuse` and, in the same run, by the merge the console used before
@@ -123,8 +123,8 @@ def _parse(argv: list[str]) -> argparse.Namespace:
                              "the former merge (see bench/sim_tour.py)")
     add_tour_options(parser)
     args = parser.parse_args(argv)
-    if (args.noise or args.seed != 1 or args.extended) and not args.tour:
-        parser.error("--noise, --seed and --extended go with --tour")
+    if (args.noise or args.seed != 1 or args.extended or args.table is not None) and not args.tour:
+        parser.error("--noise, --seed, --extended and --table go with --tour")
     return args
 
 

@@ -3,6 +3,7 @@
 Run from the repository root::
 
     python bench/sim_mapping.py --tour [--noise] [--seed N] [--extended]
+    python bench/sim_mapping.py --tour --table 0-9    # the docs' table: ground truth and noise seeds 0-9
 
 The simulated robot captures the paper's room from :data:`TOUR` (world frame, z up [m]): good views
 and :data:`BAD` ones (a camera 0.07 m from a desk, views with objects cut by the image border);
@@ -18,7 +19,8 @@ of the captures. The captures are folded into one map by :func:`pipeline.mapping
 are mapped (exactly once / twice or more / not at all); false objects; mapped objects whose centre is
 outside the workspace; the 3D centre error median and 95th percentile [m] (each mapped object against
 its assigned true object); floor-standing objects floating or buried by more than 0.05 m; and the
-median with the bad captures left out.
+median with the bad captures left out. With ``--extended`` also the errors on the true objects both tours
+map. Mapped and true objects are matched one to one per label (:func:`match`).
 """
 
 from __future__ import annotations
@@ -124,6 +126,7 @@ def evaluate(scene: Scene, in_view: set[str]) -> dict[str, float]:
     others false."""
     truth = paper_room().objects
     errors: list[float] = []
+    by_id: dict[str, float] = {}
     dup = false = 0
     matched: set[str] = set()
     for label in sorted({o.label for o in scene.objects}):
@@ -138,6 +141,7 @@ def evaluate(scene: Scene, in_view: set[str]) -> dict[str, float]:
         for r, c in zip(rows, cols):
             if cost[r, c] <= MATCH_RADIUS:
                 errors.append(float(cost[r, c]))
+                by_id[true[c].id] = float(cost[r, c])
                 matched.add(true[c].id)
                 used.add(r)
         for r in range(len(mapped)):
@@ -149,7 +153,8 @@ def evaluate(scene: Scene, in_view: set[str]) -> dict[str, float]:
     e = np.array(errors)
     return {"mapped": len(scene.objects), "outside": outside, "in_view": len(in_view), "once": len(in_view & matched),
             "missing": len(in_view - matched), "missing_ids": sorted(in_view - matched), "duplicates": dup, "false": false,
-            "median": float(np.median(e)), "p95": float(np.percentile(e, 95)), "off_floor": off_floor}
+            "median": float(np.median(e)), "p95": float(np.percentile(e, 95)), "off_floor": off_floor,
+            "errors": by_id}
 
 
 Merge = Callable[[Scene, Scene], "tuple[Scene, bool]"]
@@ -182,6 +187,45 @@ def _seed(text: str) -> int:
     return int(text)
 
 
+def _seeds(text: str) -> list[int]:
+    lo, dash, hi = text.partition("-")
+    try:
+        seeds = list(range(int(lo), int(hi) + 1)) if dash else [int(v) for v in text.split(",")]
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"must be N-M or N,M,... (non-negative integers), got {text!r}") from None
+    if not seeds or min(seeds) < 0:
+        raise argparse.ArgumentTypeError(f"must name at least one non-negative seed, got {text!r}")
+    return seeds
+
+
+def table(seeds: Sequence[int]) -> None:
+    """One Markdown row per tour and perception (ground truth, then noise with each seed): the map fusion's
+    duplicates, objects outside the workspace, median and p95 centre error [m]; for the extended tour also
+    on the true objects the tour maps too (the tour's in brackets); and the former merge of the same
+    captures as the baseline (its median and the fusion's over it)."""
+    print("| tour | perception | duplicates | outside | median | p95 | on the objects both tours map: median / p95 "
+          "(tour's) | former merge: duplicates / outside / median (fusion / former) |")
+    print("|---|---|---|---|---|---|---|---|")
+    for seed in [None, *seeds]:
+        rng = None if seed is None else np.random.default_rng(seed)
+        shots = [(pose, *shoot(pose, f"tour-{k}", rng)) for k, pose in enumerate(EXTENDED)]
+        what = "ground truth" if seed is None else f"noise, seed {seed}"
+        fused = {}
+        for tour, part in (("tour", shots[:len(TOUR)]), ("extended", shots)):
+            r, old = run(part, _fused), run(part, _legacy)
+            fused[tour] = r
+            both = ""
+            if tour == "extended":
+                keys = sorted(set(fused["tour"]["errors"]) & set(r["errors"]))
+                a = np.array([fused["tour"]["errors"][k] for k in keys])
+                b = np.array([r["errors"][k] for k in keys])
+                both = (f"{np.median(b):.3f} / {np.percentile(b, 95):.3f} ({np.median(a):.3f} / "
+                        f"{np.percentile(a, 95):.3f}), {len(keys)} objects")
+            print(f"| {tour} | {what} | {r['duplicates']} | {r['outside']} | {r['median']:.3f} | {r['p95']:.3f} | {both} | "
+                  f"{old['duplicates']} / {old['outside']} / {old['median']:.3f} (x{r['median'] / old['median']:.2f}) |",
+                  flush=True)
+
+
 def add_tour_options(parser: argparse.ArgumentParser) -> None:
     """``--noise`` and ``--seed N`` (shared with ``bench/sim_mapping.py --tour``)."""
     parser.add_argument("--noise", action="store_true",
@@ -191,6 +235,9 @@ def add_tour_options(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--extended", action="store_true",
                         help="also capture from the sides and the far end of the room (10 more poses) and print "
                              "the extended tour's figures after the tour's")
+    parser.add_argument("--table", type=_seeds, default=None, metavar="SEEDS",
+                        help="print one Markdown table instead: the tour and the extended tour with ground-truth "
+                             "perception and with noise for each seed of SEEDS (e.g. 0-9 or 1,2,3)")
 
 
 def main(argv: Sequence[str]) -> None:
@@ -199,6 +246,9 @@ def main(argv: Sequence[str]) -> None:
                                         "beside the former merge in the same run (ground-truth perception).")
     add_tour_options(parser)
     args = parser.parse_args(list(argv))
+    if args.table is not None:
+        table(args.table)
+        return
     noise, seed = args.noise, args.seed
     rng = np.random.default_rng(seed) if noise else None
     poses = EXTENDED if args.extended else TOUR
@@ -208,15 +258,31 @@ def main(argv: Sequence[str]) -> None:
           "the far end" if args.extended else "") + ", perception: ground truth"
           + (f" + noise (seed {seed})" if noise else "") + f"; one capture alone: median {first['median']:.3f} m")
     tours = [("tour", shots[:len(TOUR)])] + ([("extended", shots)] if args.extended else [])
+    fused: dict[str, dict] = {}
     for tour, part in tours:
         good = [s for s in part if s[0] not in BAD]
         for name, merge in (("former merge", _legacy), ("map fusion  ", _fused)):
             r, g = run(part, merge), run(good, merge)
+            if merge is _fused:
+                fused[tour] = r
             print(f"{tour:8s} {name}: {r['mapped']} mapped; of {r['in_view']} true objects in view {r['once']} mapped "
                   f"({r['missing']} not: {', '.join(r['missing_ids'])}), {r['duplicates']} duplicates, {r['false']} false, "
                   f"{r['outside']} outside the workspace; centre error median {r['median']:.3f} m, p95 {r['p95']:.3f} m; "
                   f"{r['held']} captures held back; {r['off_floor']} floor objects off the floor > 0.05 m; "
                   f"without the bad captures median {g['median']:.3f} m (bad ones add {r['median'] - g['median']:+.3f} m)")
+    if args.extended:
+        print(common_line(fused["tour"]["errors"], fused["extended"]["errors"]))
+
+
+def common_line(tour: dict[str, float], extended: dict[str, float]) -> str:
+    """The map fusion's errors [m] on the true objects both tours map, and on those only the extended maps."""
+    both = sorted(set(tour) & set(extended))
+    only = sorted(set(extended) - set(tour))
+    a, b = np.array([tour[k] for k in both]), np.array([extended[k] for k in both])
+    c = np.array([extended[k] for k in only]) if only else np.array([math.nan])
+    return (f"map fusion on the {len(both)} true objects both tours map: tour median {np.median(a):.3f} m, p95 "
+            f"{np.percentile(a, 95):.3f} m; extended median {np.median(b):.3f} m, p95 {np.percentile(b, 95):.3f} m; "
+            f"the {len(only)} only the extended tour maps: median {np.median(c):.3f} m")
 
 if __name__ == "__main__":
     main(sys.argv[1:])
