@@ -380,10 +380,16 @@ class SimSearch:
                 if self.out.captures >= self.budget:
                     return f"found, not reached: no seen-free spot beside it is reachable ({exc})"
                 look, none = look_beside(scene, grid, self.grid("allow"), tid, here, None, self.views + looks)
-                if look is None:
-                    return f"found, not reached: no seen-free spot beside it is reachable ({exc}); {none}"
+                if look is None:  # no look towards it is left: explore on (the strategy's own next viewpoint)
+                    pick = self.picker(self)
+                    if pick is None:
+                        return f"found, not reached: no seen-free spot beside it is reachable ({exc}); {none}"
+                    look = pick[0]
+                    self.steps.append(f"{self.out.captures}: no look beside {tid} left ({none}): exploring on from "
+                                      f"{look.why}")
+                else:
+                    self.steps.append(f"{self.out.captures}: no seen-free spot beside {tid}: looking from {look.why}")
                 looks.append((tuple(look.eye), float(look.yaw)))
-                self.steps.append(f"{self.out.captures}: no seen-free spot beside {tid}: looking from {look.why}")
                 if math.dist(here, look.goal) > 0.2:
                     why = self.move(tuple(float(v) for v in look.goal), "closed")
                     if why is not None:

@@ -4,8 +4,8 @@
 closed: the search never plans through space no capture has seen). When no seen-free spot beside it
 can be reached yet (the floor round it not seen: a target seen over a line of boxes, from the air),
 it looks to open that floor as Go look does (:func:`look_beside`: go to a seen-free spot that sees the
-approach spot's unseen cells, face it, capture) and plans again, as long as the capture budget
-lasts. A move that ends in a contact with something the map did not show is counted (``contacts``
+approach spot's unseen cells, face it, capture), or, with no such look left, explores on from the
+search's next viewpoint, and plans again, as long as the capture budget lasts. A move that ends in a contact with something the map did not show is counted (``contacts``
 in the result), followed by a capture and a new plan from where the robot stopped, and never
 repeated from the same spot to the same goal (:func:`repeats`, :func:`untried`). World frame (z up) [m].
 """
@@ -22,6 +22,7 @@ from planner.search_viewpoints import Viewpoint
 from pipeline.scene import Scene
 
 from console.session.go_look import looked_from
+from console.session.search_choose import choose_viewpoint
 from console.session.search_moves import BATTERY, PAUSED, STOPPED
 
 SAME = 0.3
@@ -74,7 +75,7 @@ def look_beside(scene: Scene, closed: PlanningGrid, allow: PlanningGrid, obj_id:
 
 class SearchFinish:
     """Mixin: the search's last approach (see the module docstring). Uses the job's ``result``, ``config``,
-    ``_session``, ``_grids``, ``_contact_routes``, ``_go``, ``_turn``, ``_capture``, ``_pos``, ``_step``,
+    ``_session``, ``_grids``, ``_looked``, ``_contact_routes``, ``_go``, ``_turn``, ``_capture``, ``_pos``, ``_step``,
     ``_wait_paused``, ``_battery_end``, ``_pause`` and ``_stop``."""
 
     def _finish(self, obj: Any) -> str:
@@ -82,8 +83,9 @@ class SearchFinish:
 
         When no seen-free spot beside it is reachable, look to open the floor beside it
         (:func:`look_beside`: go to the look's seen-free spot, face the approach spot, capture) and plan
-        again, while the capture budget lasts; when no look is left, end *found, not reached* with
-        where and why. A move that stops (a contact, a refusal) is followed by a capture and a new plan
+        again, while the capture budget lasts; when no such look is left, explore on from the search's
+        next viewpoint (:func:`console.session.search_choose.choose_viewpoint`) and plan again; when
+        none is left either, end *found, not reached* with where and why. A move that stops (a contact, a refusal) is followed by a capture and a new plan
         from where the robot is, never the same route again.
         """
         r = self.result
@@ -105,10 +107,17 @@ class SearchFinish:
                     return f"found, not reached: {where}: no seen-free spot beside it is reachable ({exc})"
                 look, none = look_beside(s.scene, grid, self._grids.grid(s, "allow"), obj.id, here, s.weights,
                                          looked_from(s) + looks)
-                if look is None:
-                    return f"found, not reached: {where}: no seen-free spot beside it is reachable ({exc}); {none}"
-                self._step("move", f"no seen-free spot beside {where} is reachable ({exc}): looking from {look.why}",
-                           level="warning")
+                if look is None:  # no look towards it is left: explore on (the search's own next viewpoint)
+                    choice = choose_viewpoint(s, here, self.config.target_height if self.config else 0.6,
+                                              self._looked, self._grids)
+                    look = untried(choice, here, self._contact_routes)
+                    if look is None:
+                        return f"found, not reached: {where}: no seen-free spot beside it is reachable ({exc}); {none}"
+                    self._step("move", f"no seen-free spot beside {where} is reachable ({exc}); {none}: exploring "
+                               f"on from the next viewpoint {choice.why}: {look.why}", level="warning")
+                else:
+                    self._step("move", f"no seen-free spot beside {where} is reachable ({exc}): looking from "
+                               f"{look.why}", level="warning")
                 looks.append((tuple(look.eye), float(look.yaw)))
                 if math.dist(here, look.goal) > 0.2:
                     why = self._go(tuple(float(v) for v in look.goal), f"a look beside {obj.id}")

@@ -136,3 +136,28 @@ def test_the_approach_plans_with_unknown_space_closed_and_a_goal_where_the_robot
     session.plan_unknown, session.goals = "closed", []
     session._reply = "no route: the goal is inside an obstacle"
     assert job._go((2.5, 1.6, 0.0), "the viewpoint").startswith("no route to the viewpoint: no route")
+
+
+def test_with_no_look_beside_the_target_left_the_search_explores_on_then_ends_not_reached(monkeypatch) -> None:
+    from console.session import search_finish
+    from console.session.search_choose import Choice
+    from planner.search_viewpoints import Viewpoint
+
+    dog = _dog(6.5)
+    scene = Scene(objects=(dog,))
+    known = _known((0.0, 0.0, 0.0), (5.0, 3.0, 3.0))
+    session, cache, captures = _Session(scene), _Cache(scene, known), []
+    job = _job(session, cache, captures)
+    job.config = SearchConfig("robot dog", max_captures=8, target_height=0.4)
+    monkeypatch.setattr(search_finish, "look_beside", lambda *a: (None, "no reachable seen-free spot sees it"))
+    vp = Viewpoint((1.0, 2.0, 0.0), (1.0, 2.0, 0.35), 0.5, "walk", 3.0, 2.0, 0.1, "(1.00, 2.00, 0.35) m on the floor")
+    offered = [Choice(vp, "over seen space", False, (vp,), 0.01), Choice(None, "none left", False, (), 0.01)]
+    asked = []
+    monkeypatch.setattr(search_finish, "choose_viewpoint", lambda *a: asked.append(a[1]) or offered[len(asked) - 1])
+    reason = job._finish(dog)
+    assert len(asked) == 2  # explored once, then nothing was left
+    assert reason.startswith("found, not reached: robot_dog-1 at (2.50, 6.50) m"), reason
+    assert "no reachable seen-free spot sees it" in reason
+    assert [g for g, _ in session.goals] == [(1.0, 2.0, 0.0)]  # went to the search's own next viewpoint ...
+    assert len(captures) == 1  # ... and captured there
+    assert any("exploring on from the next viewpoint over seen space" in s for s in job.steps)
