@@ -30,7 +30,10 @@ frame (z up) [m], yaw about +z [rad], sizes ``(w, h, l)`` [m] (see :mod:`pipelin
 5. **Duplicates** (:mod:`pipeline.mapping.map_merge`): two objects of the map before this capture, of one
    class, that now overlap in footprint and height are one object mapped twice (a false or partial
    box beside a real one started the second): the older keeps its id and takes the other's
-   observations, unless one capture detected both whole, apart; pinned objects are left alone.
+   observations, unless one capture detected both whole, apart; pinned objects are left alone. An
+   object the capture should have seen (in view, nothing mapped in front) and did not gets a miss
+   (:mod:`pipeline.mapping.map_misses`): one seen by a single capture is removed after two (one if seen
+   only in part). An update that carried a centre out of the workspace keeps it at the edge.
 6. **Support** (:mod:`pipeline.mapping.map_support`): a floor-standing class rests on the floor or on the
    object under it; a floating or buried estimate is corrected and flagged.
 7. **Consistency** (:mod:`pipeline.mapping.map_consistency`): a capture whose objects match nothing the map
