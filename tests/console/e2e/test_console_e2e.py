@@ -54,6 +54,22 @@ BROWSER_ARGS = [
 VIEWPORT = {"width": 1440, "height": 900}
 
 
+def _click_until(page: Any, name: str, done: Any, timeout: float = 300.0) -> None:
+    """Click the button ``name`` until ``done()`` (the console's state) holds: on a loaded machine a click
+    can time out, or land on a button a redraw detaches; each try is bounded by the time left."""
+    from playwright.sync_api import Error
+
+    deadline = time.monotonic() + timeout
+    while not done():
+        left = deadline - time.monotonic()
+        assert left > 0, f"clicking {name!r} never took effect"
+        try:
+            page.get_by_role("button", name=name).first.click(timeout=max(1_000, min(60_000, left * 1000)))
+        except Error:  # slow, or re-drawn mid-click: find it again
+            pass
+        wait_until(done, min(10.0, max(0.0, deadline - time.monotonic())))
+
+
 def _project(camera: Any, point: np.ndarray) -> tuple[float, float] | None:
     """Canvas pixel (x right, y down) of a world point seen by a viser client camera, or None."""
     q = np.asarray(camera.wxyz, dtype=np.float64)  # world <- camera, OpenCV optical frame
@@ -150,6 +166,7 @@ def test_operator_maps_the_room_and_builds_a_mission(console: ConsoleApp, tmp_pa
     assert session is not None and app.server is not None
     assert app.config.host == "127.0.0.1" and app.url.startswith("http://127.0.0.1:")
     assert session.scene.objects == () and session.known_summary().rule == "nothing_seen"  # starts unmapped: unseen
+    assert "known space: nothing seen yet" in app.views["known_space"].summary.content  # the Map folder says so
 
     with sync_playwright() as pw:
         ctx = pw.chromium.launch_persistent_context(
@@ -260,11 +277,10 @@ def test_operator_maps_the_room_and_builds_a_mission(console: ConsoleApp, tmp_pa
             other.get_by_text(f"mission {kinds_id} done").first.wait_for(timeout=30_000)
             assert wait_until(lambda: len(app.server.get_clients()) == 2, 15)
             n_before = len(session.scene.objects)
-            other.get_by_role("button", name="Capture & map").click()
-            assert wait_until(lambda: session.job.running or session.capture.id != first_capture, 10)
-            assert wait_until(lambda: not session.job.running and session.capture.id != first_capture, 60)
+            _click_until(other, "Capture & map", lambda: session.job.running or session.capture.id != first_capture)
+            assert wait_until(lambda: not session.job.running and session.capture.id != first_capture, 180)
             assert len(session.scene.objects) >= n_before
-            page.get_by_text(session.capture.id).first.wait_for(timeout=10_000)  # shown in the first tab too
+            page.get_by_text(session.capture.id).first.wait_for(timeout=60_000)  # shown in the first tab too
         finally:
             ctx.close()
     assert shot.stat().st_size > 20_000
@@ -291,7 +307,9 @@ def test_dropped_scene_files_spawn_and_a_restart_restores_the_session(tmp_path: 
         assert wait_until(lambda: len(session.scene.objects) == 1, 10), notices
         crate = session.scene.object("crate")
         assert crate.frame == "world" and crate.position == pytest.approx((2.5, 2.7, 0.3), abs=1e-6)
-        assert session.grid.counts()["occupied"] > 0
+        assert session.grid.counts()["occupied"] > 0 and session.grid.rule == "fully_known"  # a hand-made map
+        assert wait_until(lambda: "the map from scene files is taken as fully known"
+                          in app.views["known_space"].summary.content, 30), app.views["known_space"].summary.content
         (tmp_path / "scenes" / "broken.json").write_text('{"version": 1, "objects": [{"id": "x"}]}')
         assert wait_until(lambda: any(n.title == "Scene file ignored" and "broken.json" in n.body
                                       and "objects[0].label" in n.body for n in notices), 10), notices
