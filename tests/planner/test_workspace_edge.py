@@ -15,6 +15,7 @@ from planner.goal_look import next_look
 from planner.grid import Closed, Workspace, build_grid
 from planner.robot_model import MORPHOGEAR, RobotModel
 from planner.route import Route, path_points
+from planner.search_viewpoints import score_viewpoints
 from planner.viewpoint import suggest_viewpoint
 
 WS = Workspace()  # the paper's room: 5 x 8 x 3 m at 0.25 m; its walls are x = 0 and x = 5
@@ -50,6 +51,20 @@ def test_a_route_near_each_edge_and_in_a_corner_keeps_the_robots_radius(goal, re
     plan, _ = _gaps(pts, ws)
     assert plan >= MORPHOGEAR.radius - 1e-9, (goal, plan)
     assert plan <= MORPHOGEAR.radius + 2 * resolution  # it does go there: about as near as the rule lets it
+
+
+@pytest.mark.parametrize("gap, walks", [(0.6, False), (0.9, True)])
+def test_the_gap_between_a_lines_end_and_the_wall_is_walked_only_when_the_robot_fits(gap, walks) -> None:
+    # a 1.2 m high line along y = 4 m from the wall x = 5 to x = gap: before, the 0.7 m robot walked
+    # through the 0.6 m gap at x = 0.12, its body 0.23 m into the wall
+    line = SceneObject("line", "cardboard_box", ((5.0 + gap) / 2, 4.0, 0.6), (0.5, 1.2, 5.0 - gap), 0.0, "world")
+    route = Route(build_grid([line], WS), (1.0, 2.0, 0.0))
+    res = route.plan(route.start, (1.0, 6.0, 0.0))
+    assert res.ok, res.message
+    pts = res.points(route.grid)
+    through = bool(np.all(res.cells[:, 2] == 0))
+    assert through is walks, res.message
+    assert _gaps(_dense(pts))[0] >= MORPHOGEAR.radius - 1e-9
 
 
 def test_a_flight_over_a_line_from_wall_to_wall_keeps_the_radius_from_the_walls_and_its_height_from_the_top() -> None:
@@ -134,18 +149,23 @@ def test_edge_closed_matches_the_rule_for_every_cell_and_robot() -> None:
     assert edge_closed(low.min, low.max, low.axes(), MORPHOGEAR)[:, :, 0].all()
 
 
-def test_viewpoints_and_hover_spots_keep_the_radius_from_the_edge() -> None:
-    # seen free: the front of the room up to y = 3 and above the start; the target (a corner of the room
-    # behind) not seen yet. The old planner picked looks at x = 0.12 (Find's first viewpoint (0.12, 0.12,
-    # 0.88), Go look's hover (0.12, 7.38, 0.62))
+def _seen_front_and_along_the_wall() -> KnownSpace:
+    """Seen free: the front of the room (x < 3 m, y < 1.5 m) and a 0.5 m strip along the wall x = 0, the
+    whole room's length; the rest unknown. Without the edge rule the strip's cells 0.125 m from the wall
+    are open (0.375 m from the unknown beyond the strip): the old planner looked from there (Go look's
+    hover (0.12, 7.38, 0.62), Find's first viewpoint (0.12, 0.12, 0.88))."""
     ks = KnownSpace.empty(WS.min, WS.max, WS.resolution)
     free = np.zeros(ks.shape, dtype=bool)
-    free[:, :12, :] = True
-    ks = ks.updated(free, np.zeros_like(free))
-    g = build_grid([], WS, known=ks)
+    free[:12, :6, :] = True
+    free[:2, :, :] = True
+    return ks.updated(free, np.zeros_like(free))
+
+
+def test_viewpoints_and_hover_spots_keep_the_radius_from_the_edge() -> None:
+    g = build_grid([], WS, known=_seen_front_and_along_the_wall())
     route = Route(g, START)
     s = WS.cell_of(START)
-    for target in ((0.3, 7.7, 0.0), (4.8, 5.0, 0.0), (0.2, 3.5, 1.0)):
+    for target in ((0.3, 7.7, 0.0), (1.0, 6.0, 0.0), (0.2, 5.5, 1.0)):  # (0.3, 7.7): was (0.12, 2.12, 0.35)
         looks = next_look(g, route.cost_array, s, target)
         assert looks, target
         for look in looks:
@@ -160,3 +180,15 @@ def test_viewpoints_and_hover_spots_keep_the_radius_from_the_edge() -> None:
     pts = path_points(reach, g)
     plan, top = _gaps(pts)
     assert plan >= MORPHOGEAR.radius - 1e-9 and top >= MORPHOGEAR.height - 1e-9
+
+
+def test_the_searchs_viewpoints_keep_the_radius_from_the_edge() -> None:
+    # without the edge rule the 8th best was (0.12, 1.12, 0.00), beside the wall
+    ks = _seen_front_and_along_the_wall()
+    g = build_grid([], WS, known=ks)
+    route = Route(g, START)
+    vps = score_viewpoints(ks.state(), g, route.cost_array, WS.cell_of(START), 0.4, limit=20, seen_only=False)
+    assert len(vps) >= 5
+    for vp in vps:
+        plan, top = _gaps(np.asarray([vp.goal]))
+        assert plan >= MORPHOGEAR.radius - 1e-9 and top >= MORPHOGEAR.height - 1e-9, vp.why
