@@ -1,5 +1,6 @@
 """One description of the robot's size, used by every planning rule (configuration space, goal
-check, own cells, viewpoints).
+check, own cells, viewpoints, the workspace's edge: :func:`planner.cspace.edge_closed` keeps
+``radius`` / ``flying_radius`` from its walls and, flying, ``max(flying_radius, height)`` from its top).
 
 Frames and units: world frame (z up), metres, radians. The robot walking is a vertical cylinder
 of :attr:`RobotModel.radius` around its origin from the floor up to :attr:`RobotModel.height`; in
