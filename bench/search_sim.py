@@ -354,8 +354,10 @@ class SimSearch:
             vp, policy = pick
             self.steps.append(f"{out.captures}: {policy}: {vp.why}")
             here = self.pos
-            if math.dist(here, vp.goal) > 0.2 and not (vp.mode == "walk" and math.dist(here[:2], vp.goal[:2]) < 0.2
-                                                        and here[2] < 0.1):
+            if repeats(here, vp.goal, self.contact_routes):  # never the same route after a contact (as the console)
+                self.steps.append("the route there ended in contact before: not repeated; capturing here")
+            elif math.dist(here, vp.goal) > 0.2 and not (vp.mode == "walk" and math.dist(here[:2], vp.goal[:2]) < 0.2
+                                                          and here[2] < 0.1):
                 why = self.move(vp.goal, policy)  # a refused or stopped move: capture where the robot is
                 if why is not None:
                     if is_contact(why):
