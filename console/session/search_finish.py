@@ -5,7 +5,9 @@ closed: the search never plans through space no capture has seen). When no seen-
 can be reached yet (the floor round it not seen: a target seen over a line of boxes, from the air),
 it looks to open that floor as Go look does (:func:`look_beside`: go to a seen-free spot that sees the
 approach spot's unseen cells, face it, capture), or, with no such look left, explores on from the
-search's next viewpoint, and plans again, as long as the capture budget lasts. A move that ends in a contact with something the map did not show is counted (``contacts``
+search's next viewpoint, and plans again, as long as the capture budget lasts. When the nearest seen-free
+spot beside it is farther than :data:`NEAR_GAP` from it (the floor nearer it not seen: it could end 1 m
+off), it takes one such look first and plans again. A move that ends in a contact with something the map did not show is counted (``contacts``
 in the result), followed by a capture and a new plan from where the robot stopped, and never
 repeated from the same spot to the same goal (:func:`repeats`, :func:`untried`). World frame (z up) [m].
 """
@@ -27,6 +29,10 @@ from console.session.search_moves import BATTERY, PAUSED, STOPPED
 
 SAME = 0.3
 """Starts and goals closer than this [m] make the same route."""
+
+NEAR_GAP = 0.6
+"""An approach spot farther than this [m] from the target's footprint (the robot's radius and one cell;
+approach spots reach 1 m) means the floor nearer it was not seen: one look towards it first, then plan again."""
 
 Routes = list[tuple[tuple[float, ...], tuple[float, ...]]]
 
@@ -93,6 +99,7 @@ class SearchFinish:
         s = self._session
         budget = self.config.max_captures if self.config else 0
         looks: list[tuple[tuple[float, ...], float]] = []  # the looks taken here (never taken twice)
+        closer = False  # a look for a nearer spot than a far one (NEAR_GAP) was taken
         for _ in range(budget + 4):
             if not self._wait_paused():
                 return STOPPED
@@ -119,24 +126,22 @@ class SearchFinish:
                     self._step("move", f"no seen-free spot beside {where} is reachable ({exc}): looking from "
                                f"{look.why}", level="warning")
                 looks.append((tuple(look.eye), float(look.yaw)))
-                if math.dist(here, look.goal) > 0.2:
-                    why = self._go(tuple(float(v) for v in look.goal), f"a look beside {obj.id}")
-                    if why == STOPPED or self._stop.is_set():
-                        return STOPPED
-                    if why == BATTERY:
-                        return self._battery_end() or "battery: the console's battery rule ended the move"
-                    if why == PAUSED:
-                        continue
-                    if is_contact(why):
-                        r.contacts += 1
-                        self._contact_routes.append((here, tuple(float(v) for v in look.goal)))
-                    if why is not None:
-                        self._step("move", f"the move to the look did not end there: {why}; capturing here",
-                                   level="warning")
-                if not self._turn(look.yaw) and (self._pause.is_set() or self._stop.is_set()):
-                    continue
-                self._capture(f"looking at the floor beside {obj.id}")
+                end = self._take_look(look, obj.id, here)
+                if end:
+                    return end
                 continue
+            if app.gap > NEAR_GAP and not closer and r.captures < budget:  # the floor nearer it not seen yet
+                closer = True
+                look, _ = look_beside(s.scene, grid, self._grids.grid(s, "allow"), obj.id, here, s.weights,
+                                      looked_from(s) + looks)
+                if look is not None:
+                    self._step("move", f"the nearest seen-free spot beside {obj.id} is {app.gap:.2f} m from it: "
+                               f"looking from {look.why} for a nearer one")
+                    looks.append((tuple(look.eye), float(look.yaw)))
+                    end = self._take_look(look, obj.id, here)
+                    if end:
+                        return end
+                    continue
             if math.dist(here[:2], app.goal[:2]) < 0.2 and here[2] < 0.1:
                 r.found = True
                 return "found"
@@ -161,5 +166,28 @@ class SearchFinish:
             self._capture(f"after the move beside {obj.id} stopped")
         return "found but the move beside it failed"
 
+    def _take_look(self, look: Any, obj_id: str, here: Sequence[float]) -> str | None:
+        """Go to a look's seen-free spot, face its heading and capture. The search's end when the move
+        ended it (stopped, battery), else ``None`` (plan again: also after a pause or a stopped move)."""
+        r = self.result
+        assert r is not None
+        if math.dist(here, look.goal) > 0.2:
+            why = self._go(tuple(float(v) for v in look.goal), f"a look beside {obj_id}")
+            if why == STOPPED or self._stop.is_set():
+                return STOPPED
+            if why == BATTERY:
+                return self._battery_end() or "battery: the console's battery rule ended the move"
+            if why == PAUSED:
+                return None
+            if is_contact(why):
+                r.contacts += 1
+                self._contact_routes.append((tuple(here), tuple(float(v) for v in look.goal)))
+            if why is not None:
+                self._step("move", f"the move to the look did not end there: {why}; capturing here", level="warning")
+        if not self._turn(look.yaw) and (self._pause.is_set() or self._stop.is_set()):
+            return None
+        self._capture(f"looking at the floor beside {obj_id}")
+        return None
 
-__all__ = ["SAME", "SearchFinish", "is_contact", "look_beside", "repeats", "untried"]
+
+__all__ = ["NEAR_GAP", "SAME", "SearchFinish", "is_contact", "look_beside", "repeats", "untried"]
