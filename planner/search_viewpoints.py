@@ -35,8 +35,10 @@ from scipy import ndimage
 from scipy.sparse import csr_matrix
 from scipy.sparse.csgraph import dijkstra
 
+from pipeline.scene import SceneObject
 from planner.grid import Closed, PlanningGrid
 from planner.search_rays import per_azimuth
+from planner.view_rays import line_of_sight
 
 UNKNOWN, FREE, OCCUPIED = 0, 1, 2
 
@@ -270,4 +272,63 @@ def score_viewpoints(state: np.ndarray, grid: PlanningGrid, cost: np.ndarray, st
     return out
 
 
-__all__ = ["COST0", "blocking_cells", "cells_in_view", "MAX_RANGE", "SearchViewpointError", "Viewpoint", "path_costs", "score_viewpoints", "view_gain"]
+def confirm_viewpoint(state: np.ndarray, grid: PlanningGrid, cost: np.ndarray, start_cell: Sequence[int],
+                      target: SceneObject, avoid: Sequence[Sequence[float]] = (), away: float = 0.5) -> Viewpoint | None:
+    """Where to confirm a target seen once from: a reachable seen-free spot (floor or hover) whose
+    level camera, turned to face the target's centre, has it between :data:`MIN_RANGE` and
+    :data:`MAX_RANGE` and within its vertical field of view, with a clear line of sight (no occupied
+    cell, mapped object or unlabelled obstacle on the way; the target's own cells excepted), farther
+    than ``away`` [m] in plan from each spot in ``avoid`` (where confirming captures were taken). The
+    least ``path cost + 2 x distance to the target`` wins (near views map small objects better);
+    ``None`` when none. World frame [m], heading [rad]."""
+    st = np.asarray(state)
+    ws = grid.workspace
+    if st.shape != ws.shape:
+        raise SearchViewpointError(f"state: must have the grid's shape {ws.shape}, got {st.shape}")
+    dist = path_costs(grid, cost, start_cell)
+    idx = np.argwhere(np.isfinite(dist) & (st == FREE))
+    if len(idx) == 0:
+        return None
+    centres = ws.centers(idx)
+    ground = idx[:, 2] == 0
+    eyes = centres.copy()
+    eyes[ground, 2] = ws.floor
+    eyes[:, 2] += grid.robot.camera_height
+    for a in avoid:
+        far = np.hypot(eyes[:, 0] - float(a[0]), eyes[:, 1] - float(a[1])) > away
+        idx, centres, ground, eyes = idx[far], centres[far], ground[far], eyes[far]
+    t = np.asarray(target.position, dtype=np.float64)
+    d = t[None, :] - eyes
+    flat = np.hypot(d[:, 0], d[:, 1])
+    rng = np.hypot(flat, d[:, 2])
+    ok = (rng >= MIN_RANGE) & (rng <= MAX_RANGE) & (np.abs(np.arctan2(d[:, 2], flat)) <= 0.92 * grid.robot.camera_half_vfov)
+    idx, ground, eyes, rng = idx[ok], ground[ok], eyes[ok], rng[ok]
+    if len(idx) == 0:
+        return None
+    costs = dist[tuple(idx.T)]
+    rank = costs + 2.0 * rng
+    order = np.argsort(rank, kind="stable")[:400]
+    blocking = blocking_cells(st, grid).copy()
+    if grid.owner is not None and target.id in grid.owners:  # the target's own cells do not hide it
+        mine = grid.owner == grid.owners.index(target.id)
+        blocking &= ~ndimage.binary_dilation(mine, iterations=1)  # its seen surface too (mapped a little off)
+    tcell = ws.cell_of(tuple(t))
+    if tcell is None:
+        return None
+    seen = line_of_sight(grid, blocking, eyes[order], np.asarray([tcell], dtype=np.int64))[:, 0]
+    if not seen.any():
+        return None
+    n = order[int(np.argmax(seen))]
+    goal = ws.centers(idx[n:n + 1])[0]
+    if ground[n]:
+        goal[2] = ws.floor
+    eye = eyes[n]
+    yaw = math.atan2(t[1] - eye[1], t[0] - eye[0])
+    mode = "walk" if ground[n] else "fly"
+    why = (f"({eye[0]:.2f}, {eye[1]:.2f}, {eye[2]:.2f}) m {_mode_words(mode)}, facing {math.degrees(yaw) % 360:.0f}°: "
+           f"sees {target.id} {rng[n]:.1f} m away to confirm it, path cost {costs[n]:.1f}")
+    return Viewpoint(tuple(float(v) for v in goal), tuple(float(v) for v in eye), float(yaw), mode, 0.0,
+                     float(costs[n]), 0.0, why)
+
+
+__all__ = ["COST0", "confirm_viewpoint", "blocking_cells", "cells_in_view", "MAX_RANGE", "SearchViewpointError", "Viewpoint", "path_costs", "score_viewpoints", "view_gain"]

@@ -13,11 +13,11 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, Sequence
 
 from planner.grid import PlanningGrid
 from planner.route import Route
-from planner.search_viewpoints import Viewpoint, score_viewpoints
+from planner.search_viewpoints import Viewpoint, confirm_viewpoint, score_viewpoints
 
 from console.session.known_space_state import grid_for
 from console.session.search_types import GAIN_MIN
@@ -92,4 +92,26 @@ def choose_viewpoint(session: Any, here: tuple[float, float, float], target_heig
                   time.perf_counter() - t0)
 
 
-__all__ = ["Choice", "GridCache", "choose_viewpoint"]
+def confirm_choice(session: Any, here: tuple[float, float, float], obj: Any,
+                   spots: Sequence[Sequence[float]], cache: GridCache) -> Choice:
+    """Where to confirm ``obj`` (a target seen once) from, when the confirming capture from each of
+    ``spots`` (world [m]) missed it: :func:`planner.search_viewpoints.confirm_viewpoint` over seen space
+    (a reachable seen-free spot more than 0.5 m from each, facing the target with a clear line of
+    sight). ``Choice.viewpoint`` is ``None`` when there is none (then the ordinary next viewpoint)."""
+    t0 = time.perf_counter()
+    known = session.known_space
+    if known is None:
+        return Choice(None, "no known space yet", False, (), time.perf_counter() - t0)
+    grid = cache.grid(session, "closed")
+    start = (here[0], here[1], max(here[2], grid.workspace.floor))
+    cell = grid.workspace.cell_of(start)
+    if cell is None:
+        return Choice(None, f"the robot at {start} is outside the workspace", False, (), time.perf_counter() - t0)
+    vp = confirm_viewpoint(known.state(), grid, Route(grid, start, session.weights).cost_array, cell, obj, spots)
+    if vp is None:
+        return Choice(None, f"no reachable seen-free spot sees {obj.id} from elsewhere", False, (),
+                      time.perf_counter() - t0)
+    return Choice(vp, f"to confirm {obj.id}, over seen space", False, (vp,), time.perf_counter() - t0)
+
+
+__all__ = ["Choice", "GridCache", "choose_viewpoint", "confirm_choice"]

@@ -121,3 +121,28 @@ def test_a_box_hides_the_floor_behind_it() -> None:
     g_low, _, _ = view_gain(st, b, grid, low, 0.4)
     g_open, _, _ = view_gain(st, st == OCCUPIED, grid, low, 0.4)
     assert g_low[0] < g_open[0]
+
+
+def test_confirm_viewpoint_sees_the_target_past_a_wall_and_not_from_where_it_was_confirmed() -> None:
+    from planner.search_viewpoints import confirm_viewpoint
+
+    dog = SceneObject("robot_dog-1", "robot_dog", (2.5, 6.0, 0.2), (0.28, 0.4, 0.645))
+    wall = np.zeros(WS.shape, bool)
+    wall[6:14, 16, :] = True  # x 1.5 .. 3.5 m at y 4.0 .. 4.25 m, floor to ceiling
+    free = ~wall
+    known = _known(free, wall)
+    grid = build_grid(Scene(objects=(dog,)), WS, 0.35, known=known)
+    start = (2.5, 1.0, 0.0)
+    cost = Route(grid, start).cost_array
+    vp = confirm_viewpoint(known.state(), grid, cost, WS.cell_of(start), dog, avoid=[start])
+    assert vp is not None
+    assert math.hypot(vp.eye[0] - 2.5, vp.eye[1] - 1.0) > 0.5  # not where the missed confirmation was taken
+    d = math.dist(vp.eye, dog.position)
+    assert 0.5 <= d <= 5.0
+    assert abs(math.remainder(vp.yaw - math.atan2(6.0 - vp.eye[1], 2.5 - vp.eye[0]), math.tau)) < 1e-6  # faces it
+    for f in np.linspace(0.0, 1.0, 200):  # the line of sight passes the wall
+        x = vp.eye[0] + f * (2.5 - vp.eye[0])
+        y = vp.eye[1] + f * (6.0 - vp.eye[1])
+        assert not (1.5 <= x <= 3.5 and 4.0 <= y <= 4.25), (vp.why, x, y)
+    # every reachable spot within 0.5 m .. excluded: none left
+    assert confirm_viewpoint(known.state(), grid, cost, WS.cell_of(start), dog, avoid=[start], away=20.0) is None
