@@ -38,7 +38,9 @@ from tests.console.e2e.test_console_e2e import BROWSER_ARGS, CHROMIUM, _project,
 
 LONG = 90_000  # [ms] generous waits for the page on a loaded machine
 HIDE_NOTICES = ".mantine-Notifications-root { display: none !important; }"
-MISSION_GOALS = ((2.5, 5.5, 1.5), (2.0, 7.0, 0.0))  # over the line of boxes, then down behind it
+MISSION_GOALS = ((2.5, 5.5, 1.5), (2.0, 1.5, 0.0))  # over the line of boxes, then back to land in front of it
+# (after one capture no floor behind the line is seen free to land on; a second goal at (2.0, 7.0) was once
+# reached only by walking 0.12 m from the wall x = 0, where the line's unmapped end box stands)
 
 
 @pytest.fixture(scope="module")
@@ -53,7 +55,7 @@ def console(tmp_path_factory: pytest.TempPathFactory):
         assert wait_until(lambda: s.robot is not None, 60), "no robot state"
         assert app.mapping.start()
         assert wait_until(lambda: s.capture is not None and not s.job.running, 180), s.job
-        s.set_plan_unknown(True)  # the second goal lies behind the line, not seen from the start
+        s.set_plan_unknown(True)  # the first goal hovers behind the line, not seen from the start
         for goal in MISSION_GOALS:
             res = s.add_goal(goal)
             assert res.ok, res.message
