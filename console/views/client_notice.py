@@ -193,15 +193,24 @@ def page_style(right_panel_px: int) -> str:
     """HTML (a ``<style>`` block) that places notifications and shows a banner while disconnected.
 
     Notifications go to the bottom right of the 3D view, left of the right-docked control panel
-    ``right_panel_px`` [px] wide. The banner: viser greys out and disables its GUI while the
-    websocket is down (its ``DisconnectedGate`` wrapper gets ``pointer-events: none``); a CSS
+    ``right_panel_px`` [px] wide; on a phone (:data:`console.views.screen_layout.PHONE_MAX_PX`), where the panel
+    is a sheet at the bottom, across the top of the screen below the wider-screen line, over neither.
+    The banner: viser greys out and disables its GUI while the websocket is down (its ``DisconnectedGate`` wrapper gets ``pointer-events: none``); a CSS
     ``:has()`` rule on that state shows a red bar across the top of the page, gone on reconnect.
     """
+    from console.views.screen_layout import PHONE_MAX_PX
+
     text = DISCONNECTED_TEXT.replace("\\", "\\\\").replace('"', '\\"')
     return f"""<style>
 .mantine-Notifications-root {{
   top: auto !important; left: auto !important;
   bottom: 1em !important; right: calc({int(right_panel_px)}px + 1em) !important;
+}}
+@media (max-width: {PHONE_MAX_PX}px) {{
+  .mantine-Notifications-root {{
+    top: 4.2em !important; bottom: auto !important; left: 0.5em !important; right: 0.5em !important;
+    width: auto !important; max-width: none !important;
+  }}
 }}
 body:has(div[style*="pointer-events: none"][style*="opacity: 0.5"])::before {{
   content: "{text}";

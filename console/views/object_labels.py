@@ -112,9 +112,11 @@ def overlaps(a: Rect, b: Rect, gap: float = GAP_PX) -> bool:
 
 
 def declutter(rects: Sequence[Rect | None], order: Sequence[int], reserved: Sequence[Rect] = (),
-              limit: int = MAX_LABELS, gap: float = GAP_PX) -> list[int]:
+              limit: int = MAX_LABELS, gap: float = GAP_PX, soft: Sequence[Rect] = (),
+              exempt: frozenset[int] | set[int] = frozenset()) -> list[int]:
     """Indices of ``rects`` to show: taken in ``order``, each kept when it overlaps no box kept before
-    it nor a ``reserved`` one, at most ``limit``; ``None`` (off the picture) is never kept."""
+    it nor a ``reserved`` one nor (unless its index is in ``exempt``) a ``soft`` one (markers), at most
+    ``limit``; ``None`` (off the picture) is never kept."""
     kept: list[int] = []
     boxes = list(reserved)
     for i in order:
@@ -122,6 +124,8 @@ def declutter(rects: Sequence[Rect | None], order: Sequence[int], reserved: Sequ
         if r is None or len(kept) >= limit:
             continue
         if any(overlaps(r, b, gap) for b in boxes):
+            continue
+        if i not in exempt and any(overlaps(r, b, gap) for b in soft):
             continue
         kept.append(i)
         boxes.append(r)
@@ -150,18 +154,23 @@ def _as_fixed(r: Any) -> FixedLabel:
 
 def choose(spots: Sequence[LabelSpot], camera: Any, selected: str | None = None,
            reserved_spots: Sequence[Any] = (), limit: int = MAX_LABELS,
-           markers: Sequence[Sequence[float]] = (), rank: Sequence[int] | None = None) -> list[tuple[int, Rect]]:
+           markers: Sequence[Sequence[float]] = (), rank: Sequence[int] | None = None,
+           marker_exempt: Sequence[int] = (), frame: Rect | None = None) -> list[tuple[int, Rect]]:
     """Which labels a camera shows: ``(index into spots, screen box [px])``, most important first.
 
     ``camera`` has viser's ``wxyz``, ``position``, ``fov``, ``image_width`` and ``image_height``;
     ``selected`` is the selected object's id (its label first); ``reserved_spots`` are labels every tab shows
     (:class:`FixedLabel`, or ``(text, anchor point)`` with a bottom-centre anchor: the robot's) and
-    ``markers`` world points (goal markers) that the chosen labels must leave free; ``rank`` orders the spots
-    after the selected one (lower first; default all equal), then the nearest first.
+    ``markers`` world points (goal markers) that the chosen labels must leave free, except the spots indexed in
+    ``marker_exempt`` (a take-off spot's label names the marker it hangs from); ``rank`` orders the spots
+    after the selected one (lower first; default all equal), then the nearest first. ``frame`` is the part of
+    the picture the operator sees ``(x0, y0, x1, y1)`` [px] (on a phone, above the control sheet): a label not
+    wholly inside it is not shown (default: the whole picture; a label cut by its edge is never shown).
     """
     W, H = float(camera.image_width), float(camera.image_height)
     if W <= 0 or H <= 0:
         return []
+    frame = frame if frame is not None else (0.0, 0.0, W, H)
     scale = px_per_css(H)
     pose = (camera.wxyz, camera.position, float(camera.fov), W, H)
     rects: list[Rect | None] = []
@@ -172,7 +181,12 @@ def choose(spots: Sequence[LabelSpot], camera: Any, selected: str | None = None,
             rects.append(None)
             depth.append(math.inf)
             continue
-        rects.append(label_rect(s.text, p[0], p[1], scale, s.anchor, s.font_scale))
+        r = label_rect(s.text, p[0], p[1], scale, s.anchor, s.font_scale)
+        if not (frame[0] <= r[0] and r[2] <= frame[2] and frame[1] <= r[1] and r[3] <= frame[3]):
+            rects.append(None)  # cut by the picture's edge or under the phone's sheet: part of it at best
+            depth.append(math.inf)
+            continue
+        rects.append(r)
         depth.append(p[2])
     reserved = []
     for r in map(_as_fixed, reserved_spots):
@@ -180,14 +194,15 @@ def choose(spots: Sequence[LabelSpot], camera: Any, selected: str | None = None,
         if p is not None:
             reserved.append(label_rect(r.text, p[0], p[1], scale, r.anchor, r.font_scale))
     half = MARKER_PX * scale / 2
+    soft = []
     for m in markers:
         p = project(*pose, m)
         if p is not None:
-            reserved.append((p[0] - half, p[1] - half, p[0] + half, p[1] + half))
+            soft.append((p[0] - half, p[1] - half, p[0] + half, p[1] + half))
     ranks = list(rank) if rank is not None else [0] * len(spots)
     order = sorted(range(len(spots)), key=lambda i: (0 if selected is not None and selected in spots[i].ids else 1,
                                                      ranks[i], depth[i]))
-    keep = declutter(rects, order, reserved, limit, GAP_PX * scale)
+    keep = declutter(rects, order, reserved, limit, GAP_PX * scale, soft, frozenset(marker_exempt))
     return [(i, rects[i]) for i in keep]  # type: ignore[misc]
 
 
@@ -339,6 +354,18 @@ class ClientLabels:
             self._markers[name] = pts  # type: ignore[assignment]
         self.moved()
 
+    @staticmethod
+    def _frame(camera: Any) -> Rect:
+        """The part of a tab's picture the operator sees [px]: all of it (the docked panels sit beside the 3D
+        view), on a phone the part above the control sheet laid over it."""
+        from console.views.screen_layout import PHONE_ASPECT, PHONE_SHEET_VH
+
+        W, H = float(camera.image_width), float(camera.image_height)
+        if H > 0 and W / H < PHONE_ASPECT:  # a phone held upright (as screen_layout tells it; a desktop view between the
+            # panels at 1280 x 720 is only about 580 px wide, but wider than tall)
+            return (0.0, 0.0, W, H * (1.0 - PHONE_SHEET_VH / 100.0))
+        return (0.0, 0.0, W, H)
+
     def set_enabled(self, enabled: bool) -> None:
         """Show (decluttered) or hide every object label (the paths' labels stay)."""
         with self._lock:
@@ -375,8 +402,10 @@ class ClientLabels:
                     rank = [LAYERS.index(la) for la, _ in layered]
                     reserved = list(fixed_labels(self._server)) + list(self._reserved())
                     markers = [m for pts in self._markers.values() for m in pts]
-                    picked = choose(spots, tab["client"].camera, self._selected(), reserved, markers=markers,
-                                    rank=rank)
+                    camera = tab["client"].camera
+                    picked = choose(spots, camera, self._selected(), reserved, markers=markers, rank=rank,
+                                    marker_exempt=[i for i, (la, _) in enumerate(layered) if la == "paths"],
+                                    frame=self._frame(camera))
                     chosen = [(index[id(spots[i])], rect) for i, rect in picked]
                 except Exception:  # noqa: BLE001 - no camera state from the tab yet: show none until it moves
                     chosen = []

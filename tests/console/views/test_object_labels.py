@@ -131,6 +131,8 @@ def test_labels_every_tab_shows_are_found_where_they_are_now_and_others_leave_th
         gu, gv, _ = project(cam.wxyz, cam.position, cam.fov, cam.image_width, cam.image_height, goal)
         clear = choose(spots, cam, markers=[goal])
         assert all(not (r[0] - 9 <= gu <= r[2] + 9 and r[1] - 9 <= gv <= r[3] + 9) for _, r in clear)  # marker left free
+        hung = LabelSpot("1. take-off", goal, (), "top-center", 0.75)  # a spot's label names the marker it hangs from
+        assert choose([hung], cam, markers=[goal]) == [] and len(choose([hung], cam, markers=[goal], marker_exempt=[0])) == 1
         path = LabelSpot("2. take-off · 5. land", (2.4, 4.3, 0.05), (), "top-center", 0.75)
         first = choose([*spots, path], cam, rank=[1] * len(spots) + [0])
         assert first[0][0] == len(spots)  # the paths' label before the objects'
@@ -139,3 +141,20 @@ def test_labels_every_tab_shows_are_found_where_they_are_now_and_others_leave_th
         board.close()
     finally:
         server.stop()
+
+
+def test_no_label_is_drawn_cut_by_the_edge_nor_under_a_phones_sheet() -> None:
+    spots = crowd()
+    near = look((2.4, 2.6, 1.3), (2.4, 4.2, 0.8))
+    shown = choose(spots, near)
+    assert shown and all(0 <= r[0] and r[2] <= 900 and 0 <= r[1] and r[3] <= 700 for _, r in shown)
+    sheet = (0.0, 0.0, 900.0, 350.0)  # a phone's control sheet over the lower half
+    assert any(r[3] > 350 for _, r in shown)  # without it some would be under the sheet
+    above = choose(spots, near, frame=sheet)
+    assert above and all(r[3] <= 350 for _, r in above)
+    from console.views.object_labels import ClientLabels
+
+    phone = Cam(np.zeros(3), np.array([1.0, 0, 0, 0]), 1.0, 390, 844)
+    between_panels = Cam(np.zeros(3), np.array([1.0, 0, 0, 0]), 1.0, 580, 720)  # a 1280 x 720 window's 3D view
+    assert ClientLabels._frame(phone) == pytest.approx((0, 0, 390, 844 * 0.45))
+    assert ClientLabels._frame(between_panels) == (0, 0, 580, 720)
