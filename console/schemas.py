@@ -7,6 +7,7 @@ bad field, exit 1 when there is one). The schemas themselves live beside the cod
 - ``scene``: :data:`pipeline.scene_schema.SCENE_SCHEMA` (scene files, ``map --out``);
 - ``mission``: :data:`planner.mission_schema.MISSION_SCHEMA` (``plan --out``, the console's missions);
 - ``session``: :data:`console.session.session_schema.SESSION_SCHEMA` (the console's ``session.json``);
+- ``history``: :data:`console.session.history_schema.HISTORY_SCHEMA` (the console's undo history ``history.json``);
 - ``camera``: :data:`pipeline.camera.camera_schema.CAMERA_SCHEMA` (``camera.toml``, as parsed);
 - ``scene_graph``: :data:`planner.scene_graph_schema.SCENE_GRAPH_SCHEMA` (``describe --json``);
 - ``search_result``: :data:`console.session.search_result_schema.SEARCH_RESULT_SCHEMA` (``search --out``).
@@ -25,6 +26,7 @@ from pipeline.scene_schema import SCENE_SCHEMA
 from planner.mission_schema import MISSION_SCHEMA
 from planner.scene_graph_schema import SCENE_GRAPH_SCHEMA
 
+from console.session.history_schema import HISTORY_SCHEMA
 from console.session.search_result_schema import SEARCH_RESULT_SCHEMA
 from console.session.session_schema import SESSION_SCHEMA
 
@@ -37,6 +39,7 @@ SCHEMAS: dict[str, dict[str, Any]] = {
     "scene": SCENE_SCHEMA,
     "mission": MISSION_SCHEMA,
     "session": SESSION_SCHEMA,
+    "history": HISTORY_SCHEMA,
     "camera": CAMERA_SCHEMA,
     "scene_graph": SCENE_GRAPH_SCHEMA,
     "search_result": SEARCH_RESULT_SCHEMA,
