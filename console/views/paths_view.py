@@ -243,9 +243,8 @@ class PathsView:
         elif topic == SETTINGS:
             self._sync_settings()
         elif topic == RUN:  # the mission state rules the route buttons (console.session.mission_rules)
-            r = self._session.route_snapshot()
-            with self._lock:
-                self._sync_edits(r)
+            with self._lock:  # read inside the lock: a route read before a newer redraw must not undo it
+                self._sync_edits(self._session.route_snapshot())
 
     def _sync_edits(self, r: Any) -> None:
         edits = rules.route_edits(r.candidate is not None, len(r.registered), self.read_only, self._session.run.state)

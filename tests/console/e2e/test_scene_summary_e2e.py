@@ -12,14 +12,20 @@ from __future__ import annotations
 import math
 import tempfile
 from pathlib import Path
+from typing import Any
 
 import pytest
 
-from console.app import ConsoleApp, ConsoleConfig, wait_until
+from console.app import ConsoleApp, ConsoleConfig
 from console.link.world import paper_room
 from console.views.scene_summary_view import option_label
+from tests.console.e2e.e2e_helpers import click_until, wait_for
 
 CHROMIUM = Path("/usr/bin/chromium")
+LONG = 120_000  # [ms] one page wait on a loaded machine
+SAID_JS = ("() => { window.__said = []; new MutationObserver(() => { for (const b of document.querySelectorAll('button'))"
+           " { const t = b.textContent; if (t.startsWith('Cop') && t !== 'Copy' && !window.__said.includes(t))"
+           " window.__said.push(t); } }).observe(document.body, {subtree: true, childList: true, characterData: true}); }")
 BROWSER_ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--no-first-run", "--disable-background-networking",
                 "--disable-component-update", "--disable-sync", "--use-angle=swiftshader", "--enable-unsafe-swiftshader"]
 
@@ -43,7 +49,7 @@ def test_copy_the_summary_and_go_to_the_robot_dog(tmp_path: Path) -> None:
     try:
         session, view = app.session, app.views["summary"]
         session.spawn(paper_room(), origin="test")
-        assert wait_until(lambda: "robot_dog-1" in view.text, 60)
+        wait_for(lambda: "robot_dog-1" in view.text, "the summary naming the robot dog")
         with sync_playwright() as pw:
             ctx = pw.chromium.launch_persistent_context(
                 tempfile.mkdtemp(prefix="chromium-", dir=tmp_path), executable_path=str(CHROMIUM), headless=True,
@@ -53,26 +59,35 @@ def test_copy_the_summary_and_go_to_the_robot_dog(tmp_path: Path) -> None:
                 page = ctx.new_page()
                 page.goto(app.url)
                 box = page.locator("textarea", has_text="robot dog (robot_dog-1)").first
-                box.wait_for(timeout=60_000)
-                copy = page.get_by_role("button", name="Copy")
-                copy.scroll_into_view_if_needed()
-                copy.click()
-                page.get_by_role("button", name="Copied").wait_for(timeout=60_000)
+                box.wait_for(timeout=LONG)
+                # the button's feedback lasts 2.5 s, and a loaded page may draw a frame every few seconds:
+                # record every word the button says, then click until it has said one
+                page.evaluate(SAID_JS)
+                click_until(lambda: page.get_by_role("button", name="Copy"),
+                            lambda: bool(page.evaluate("window.__said.length")), "the Copy button's feedback")
+                said = page.evaluate("window.__said")
+                assert said[0] == "Copied \u2713", said
                 copied = page.evaluate("navigator.clipboard.readText()")
                 assert copied == view.text  # the whole summary, as the server wrote it
 
                 assert session.route_snapshot().candidate_goal is None
-                goto = page.get_by_label("Go to")
-                goto.scroll_into_view_if_needed()
-                goto.click()  # a Mantine combobox: open it, then pick the option
-                page.get_by_role("option", name=option_label("robot_dog", "robot_dog-1")).click()
-                assert wait_until(lambda: session.route_snapshot().candidate_goal is not None, 60), \
-                    "choosing the robot dog in Go to made no candidate"
+                dog = page.get_by_role("option", name=option_label("robot_dog", "robot_dog-1"))
+
+                def the_dog_option() -> Any:  # open the Mantine combobox when it is closed, then pick the option
+                    if not dog.is_visible():
+                        goto = page.get_by_label("Go to")
+                        goto.scroll_into_view_if_needed(timeout=LONG)
+                        goto.click(timeout=LONG)
+                        dog.wait_for(timeout=LONG)
+                    return dog
+
+                click_until(the_dog_option, lambda: session.route_snapshot().candidate_goal is not None,
+                            "a candidate after choosing the robot dog in Go to")
             finally:
                 ctx.close()
         goal = session.route_snapshot().candidate_goal
-        dog = paper_room().object("robot_dog-1")
-        assert math.dist(goal[:2], dog.position[:2]) < 1.0 and goal[2] == 0.0
+        mapped = paper_room().object("robot_dog-1")
+        assert math.dist(goal[:2], mapped.position[:2]) < 1.0 and goal[2] == 0.0
         assert session.route_snapshot().candidate[:, 2].max() > 1.2  # over the boxes
     finally:
         app.stop()

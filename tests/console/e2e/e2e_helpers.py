@@ -1,0 +1,53 @@
+"""Shared waits and clicks for the browser tests, made for a loaded 2-core machine.
+
+A page there may draw one frame every few seconds, so Playwright's "wait until stable" (two frames with
+the same box) alone can take ten seconds, and a panel re-drawn between two tries detaches the button
+found before. :func:`click_until` therefore finds the element afresh each try, bounds each try by the
+time left, and stops when the console's *state* says the click took, never after a fixed sleep.
+"""
+
+from __future__ import annotations
+
+import time
+from typing import Any, Callable
+
+from console.app import wait_until
+
+
+def wait_for(predicate: Callable[[], bool], what: str, timeout: float = 300.0) -> None:
+    """Wait until ``predicate()`` holds (polled), else fail naming ``what``."""
+    assert wait_until(predicate, timeout, 0.05), f"timed out waiting for {what}"
+
+
+def click_until(locate: Callable[[], Any], done: Callable[[], bool], what: str, timeout: float = 300.0,
+                settle: float = 15.0) -> None:
+    """Click the element ``locate()`` returns until ``done()`` holds.
+
+    Args:
+        locate: Returns a Playwright locator; called again each try (a re-drawn panel detaches the last one).
+        done: The state that shows the click took (the console's session, or the page's own state).
+        what: Named in the failure, with the last errors Playwright gave.
+        timeout: Overall deadline [s].
+        settle: How long [s] to wait for ``done`` after a click that raised no error before clicking again.
+    """
+    from playwright.sync_api import Error
+
+    deadline = time.monotonic() + timeout
+    errors: list[str] = []
+    while not done():
+        left = deadline - time.monotonic()
+        assert left > 0, f"timed out clicking for {what}: {errors[-3:]}"
+        attempt = max(1000.0, min(60_000.0, 1000.0 * left))  # [ms] one try, bounded by the time left
+        try:
+            target = locate()
+            target.scroll_into_view_if_needed(timeout=attempt)
+            target.click(timeout=attempt)
+        except Error as exc:  # detached, hidden, covered or not yet stable: find it again
+            errors.append(str(exc).splitlines()[0][:300])
+            continue
+        wait_until(done, max(0.1, min(settle, deadline - time.monotonic())), 0.05)
+
+
+def button(page: Any, name: str) -> Callable[[], Any]:
+    """A locator factory for the button named exactly ``name`` (the first one), for :func:`click_until`."""
+    return lambda: page.get_by_role("button", name=name, exact=True).first
