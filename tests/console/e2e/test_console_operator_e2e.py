@@ -31,6 +31,7 @@ from console.app import ConsoleApp, ConsoleConfig, wait_until
 from console.session.session import RobotSnapshot, Session
 from pipeline.camera.geometry import Pose
 from pipeline.scene import Scene, SceneObject
+from tests.console.e2e.e2e_helpers import button, click_until
 from tests.console.e2e.test_console_e2e import BROWSER_ARGS, CHROMIUM, VIEWPORT, needs_browser
 
 TOLERANCE = 0.3  # [m] "starts at the robot" (console.session.operator_state.START_TOLERANCE)
@@ -91,16 +92,20 @@ def _wait(predicate: Callable[[], bool], what: str, timeout: float = 60.0) -> No
     assert wait_until(predicate, timeout, 0.02), f"timed out waiting for {what}"
 
 
+def _click(page: Any, name: str, done: Callable[[], bool], what: str) -> None:
+    """Click the button ``name`` until the console's state says ``done`` (each try bounded by the time left:
+    a loaded page may draw a frame every few seconds, and a button enabled by the latest state needs one)."""
+    click_until(button(page, name), done, what)
+
+
 def _plan(app: ConsoleApp, page: Any, goal: tuple[float, float, float]) -> None:
     """Add a goal (session), Register and Build mission (clicks)."""
     s = app.session
     n = len(s.route_snapshot().registered)
     res = s.add_goal(goal)
     assert res.ok, res.message
-    _button(page, "Register").click()
-    _wait(lambda: len(s.route_snapshot().registered) == n + 1, "registered")
-    _button(page, "Build mission").click()
-    _wait(lambda: s.mission is not None, "mission built")
+    _click(page, "Register", lambda: len(s.route_snapshot().registered) == n + 1, "registered")
+    _click(page, "Build mission", lambda: s.mission is not None, "mission built")
 
 
 def _launch(ctx_dir: Path) -> tuple[Any, Any]:
@@ -129,32 +134,26 @@ def test_abort_edit_and_land_keep_the_operator_in_control(tmp_path: Path) -> Non
         # --- item 3: a walk stopped early, aborted on the ground; Build starts at the robot -------------
         _plan(app, page, (2.5, 3.1, 0.0))
         expect(_button(page, "Execute")).to_be_enabled(timeout=LONG)
-        _button(page, "Execute").click()
-        _wait(lambda: s.run.state == "running", "the walk under way")
-        _button(page, "Pause").click()  # clicks take seconds on a loaded machine: the walk is long and slow
-        _wait(lambda: s.run.state == "paused", f"paused (run {s.run})")
-        _button(page, "Abort").click()
-        _wait(lambda: s.run.state == "aborted", "aborted")
+        _click(page, "Execute", lambda: s.run.state == "running", "the walk under way")
+        # clicks take seconds on a loaded machine: the walk is long and slow
+        _click(page, "Pause", lambda: s.run.state == "paused", f"paused (run {s.run})")
+        _click(page, "Abort", lambda: s.run.state == "aborted", "aborted")
         stopped = _floor_under(app)
         assert stopped[1] < 3.0, "the robot stopped early"
         _wait(lambda: _near(s.route_snapshot().start, stopped, 0.01), "the route start at the robot")
         assert s.mission is None  # the aborted mission is retired ...
         assert s.route_snapshot().goals[-1][:2] == pytest.approx((2.625, 3.125))  # ... its goal is kept
         expect(_button(page, "Resume")).to_be_hidden(timeout=LONG)
-        _button(page, "Build mission").click()
-        _wait(lambda: s.mission is not None, "mission rebuilt")
+        _click(page, "Build mission", lambda: s.mission is not None, "mission rebuilt")
         assert _near(s.mission.segments[0].start, stopped)
         expect(_button(page, "Execute")).to_be_enabled(timeout=LONG)
 
         # --- item 2: a paused walk; an object moved onto the rest of it retires the mission everywhere -----
-        _button(page, "Clear").click()
-        _wait(lambda: s.route_snapshot().registered == () and s.mission is None, "cleared")
+        _click(page, "Clear", lambda: s.route_snapshot().registered == () and s.mission is None, "cleared")
         _plan(app, page, (0.6, 3.1, 0.0))
         mission = s.mission
-        _button(page, "Execute").click()
-        _wait(lambda: s.run.state == "running", "the walk under way")
-        _button(page, "Pause").click()
-        _wait(lambda: s.run.state == "paused", f"paused (run {s.run})")
+        _click(page, "Execute", lambda: s.run.state == "running", "the walk under way")
+        _click(page, "Pause", lambda: s.run.state == "paused", f"paused (run {s.run})")
         expect(_button(page, "Resume")).to_be_visible(timeout=LONG)
         here = np.asarray(_floor_under(app))
         path = s.route_snapshot().registered[0]
@@ -175,25 +174,23 @@ def test_abort_edit_and_land_keep_the_operator_in_control(tmp_path: Path) -> Non
         # --- item 1: abort in the air: the robot holds, armed; Land here puts it on the floor -------------
         # a goal 2.5 m straight above the robot: it climbs (slowly) over free floor whenever the click
         # lands; the mission ends in the air, which the panel says
-        _button(page, "Clear").click()
-        _wait(lambda: s.route_snapshot().registered == () and s.mission is None, "cleared")
+        _click(page, "Clear", lambda: s.route_snapshot().registered == () and s.mission is None, "cleared")
         x, y, _ = _robot_at(app)
         _plan(app, page, (x, y, 2.5))
         goal = s.route_snapshot().goals[-1]
         assert s.mission.kinds()[-1] in ("takeoff", "fly")
         expect(_button(page, "Add landing")).to_be_visible(timeout=LONG)
         page.get_by_text("the mission ends hovering").first.wait_for(timeout=LONG)
-        _button(page, "Execute").click()
+        _click(page, "Execute", lambda: s.run.state == "running", "the climb under way")
         _wait(lambda: _robot_at(app)[2] > 0.3, "the robot climbing")
-        _button(page, "Abort").click()
-        _wait(lambda: s.run.state == "aborted", "aborted")
+        _click(page, "Abort", lambda: s.run.state == "aborted", "aborted")
         st = app.link.latest_state()
         assert st.armed and not st.landed and st.position[2] > 0.25  # holding in the air
         expect(_button(page, "Land here")).to_be_enabled(timeout=LONG)
         expect(_button(page, "Hold")).to_be_visible(timeout=LONG)
         expect(_button(page, "Return")).to_be_visible(timeout=LONG)
         _wait(lambda: _near(s.route_snapshot().start, _robot_at(app)), "the route start at the hovering robot")
-        _button(page, "Land here").click()
+        _click(page, "Land here", lambda: s.run.state in ("running", "done"), "landing under way")
         _wait(lambda: app.link.latest_state().landed and not app.link.latest_state().armed and s.run.state == "done",
               f"landed and disarmed ({app.link.latest_state()}, run {s.run}, notices {notices[-4:]})")
         assert math.dist(_robot_at(app)[:2], st.position[:2]) < 0.1 and _robot_at(app)[2] == 0.0  # straight down
@@ -230,14 +227,14 @@ def test_a_restart_with_the_robot_elsewhere_is_replanned_from_the_robot(tmp_path
         expect(replan).to_be_visible(timeout=LONG)
         expect(_button(page, "Execute")).to_be_disabled(timeout=LONG)
         page.get_by_text("Execute is off").first.wait_for(timeout=LONG)  # and says why
-        replan.click()
         robot = _floor_under(app)
+        _click(page, "Re-plan from the robot", lambda: _near(s.route_snapshot().start, robot, 0.01), "re-planned")
         _wait(lambda: _near(s.route_snapshot().start, robot, 0.01), "the route re-planned from the robot")
         _wait(lambda: s.mission is not None and _near(s.mission.segments[0].start, robot), "the mission rebuilt")
         expect(replan).to_be_hidden(timeout=LONG)
         expect(_button(page, "Execute")).to_be_enabled(timeout=LONG)
-        _button(page, "Execute").click()
-        _wait(lambda: s.run.state == "done", f"the mission done (run {s.run})", timeout=120)
+        _click(page, "Execute", lambda: s.run.state in ("running", "done"), "the mission under way")
+        _wait(lambda: s.run.state == "done", f"the mission done (run {s.run})", timeout=300)
         assert math.dist(_robot_at(app)[:2], (1.125, 6.625)) < 0.3
     finally:
         ctx.close()
