@@ -48,6 +48,22 @@ def click_until(locate: Callable[[], Any], done: Callable[[], bool], what: str, 
         wait_until(done, max(0.1, min(settle, deadline - time.monotonic())), 0.05)
 
 
+SAID_JS = ("() => { window.__said = []; new MutationObserver(() => { for (const b of document.querySelectorAll('button'))"
+           " { const t = b.textContent; if (t.startsWith('Cop') && t !== 'Copy' && !window.__said.includes(t))"
+           " window.__said.push(t); } }).observe(document.body, {subtree: true, childList: true, characterData: true}); }")
+
+
+def copy_and_hear(page: Any, timeout: float = 300.0) -> list[str]:
+    """Click the scene summary's Copy button until it answers; returns what it said (``Copied ✓`` first).
+
+    Its answer lasts 2.5 s and a loaded page may draw a frame every few seconds, so every word the button
+    says is recorded in the page as it happens (a MutationObserver) rather than polled."""
+    page.evaluate(SAID_JS)
+    click_until(lambda: page.get_by_role("button", name="Copy", exact=True),
+                lambda: bool(page.evaluate("window.__said.length")), "the Copy button's answer", timeout)
+    return list(page.evaluate("window.__said"))
+
+
 def button(page: Any, name: str) -> Callable[[], Any]:
     """A locator factory for the button named exactly ``name`` (the first one), for :func:`click_until`."""
     return lambda: page.get_by_role("button", name=name, exact=True).first

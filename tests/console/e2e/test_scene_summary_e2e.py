@@ -19,13 +19,10 @@ import pytest
 from console.app import ConsoleApp, ConsoleConfig
 from console.link.world import paper_room
 from console.views.scene_summary_view import option_label
-from tests.console.e2e.e2e_helpers import click_until, wait_for
+from tests.console.e2e.e2e_helpers import click_until, copy_and_hear, wait_for
 
 CHROMIUM = Path("/usr/bin/chromium")
 LONG = 120_000  # [ms] one page wait on a loaded machine
-SAID_JS = ("() => { window.__said = []; new MutationObserver(() => { for (const b of document.querySelectorAll('button'))"
-           " { const t = b.textContent; if (t.startsWith('Cop') && t !== 'Copy' && !window.__said.includes(t))"
-           " window.__said.push(t); } }).observe(document.body, {subtree: true, childList: true, characterData: true}); }")
 BROWSER_ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--no-first-run", "--disable-background-networking",
                 "--disable-component-update", "--disable-sync", "--use-angle=swiftshader", "--enable-unsafe-swiftshader"]
 
@@ -60,12 +57,7 @@ def test_copy_the_summary_and_go_to_the_robot_dog(tmp_path: Path) -> None:
                 page.goto(app.url)
                 box = page.locator("textarea", has_text="robot dog (robot_dog-1)").first
                 box.wait_for(timeout=LONG)
-                # the button's feedback lasts 2.5 s, and a loaded page may draw a frame every few seconds:
-                # record every word the button says, then click until it has said one
-                page.evaluate(SAID_JS)
-                click_until(lambda: page.get_by_role("button", name="Copy"),
-                            lambda: bool(page.evaluate("window.__said.length")), "the Copy button's feedback")
-                said = page.evaluate("window.__said")
+                said = copy_and_hear(page)  # its answer is recorded as it happens: a loaded page draws slowly
                 assert said[0] == "Copied \u2713", said
                 copied = page.evaluate("navigator.clipboard.readText()")
                 assert copied == view.text  # the whole summary, as the server wrote it
