@@ -140,6 +140,7 @@ class SimSearch:
         self.steps: list[str] = []
         self._grids: dict[tuple[str, int], PlanningGrid] = {}
         self.confirmed_from: list[tuple[float, float, float]] = []  # spots a confirming capture was taken from
+        self.confirm_target: Any = None  # the target to confirm from elsewhere (the product's choice reads it)
         self.contact_routes: list[tuple[tuple[float, ...], tuple[float, ...]]] = []  # (start, goal) that hit
 
     # --- the map ------------------------------------------------------------------------------------
@@ -330,6 +331,7 @@ class SimSearch:
         self.capture()
         while True:
             seen = self.target_seen()
+            self.confirm_target = None  # a target seen once whose confirming capture from here missed it
             if seen is not None:
                 tid, n = seen
                 if n >= CONFIRM_CAPTURES:
@@ -344,6 +346,7 @@ class SimSearch:
                     self.capture()
                     continue
                 self.steps.append(f"{out.captures}: {tid} seen once; the confirming capture from here missed it")
+                self.confirm_target = next(o for o in self.objects() if o.id == tid)
             if out.captures >= self.budget:
                 return "not found: budget used"
             t0 = time.perf_counter()

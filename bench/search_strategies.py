@@ -20,7 +20,7 @@ from __future__ import annotations
 from typing import Callable
 
 from bench.search_sim import SimSearch
-from console.session.search_choose import GridCache, choose_viewpoint
+from console.session.search_choose import GridCache, choose_viewpoint, confirm_choice
 from console.session.search_finish import untried
 from pipeline.scene import Scene
 from planner.grid import CostWeights
@@ -53,8 +53,15 @@ class SessionView:
 
 
 def product(sim: SimSearch) -> tuple[Viewpoint, str] | None:
-    """The console's own choice (:func:`console.session.search_choose.choose_viewpoint`)."""
-    choice = choose_viewpoint(SessionView(sim), sim.here(), sim.target_height, sim.looked, GridCache())
+    """The console's own choice (:func:`console.session.search_choose.choose_viewpoint`); a target seen once
+    whose confirming capture missed it first gets a spot elsewhere that faces it
+    (:func:`console.session.search_choose.confirm_choice`), as the console's loop."""
+    view = SessionView(sim)
+    choice = None
+    if sim.confirm_target is not None:
+        choice = confirm_choice(view, sim.here(), sim.confirm_target, sim.confirmed_from, GridCache())
+    if choice is None or choice.viewpoint is None:
+        choice = choose_viewpoint(view, sim.here(), sim.target_height, sim.looked, GridCache())
     vp = untried(choice, sim.pos, sim.contact_routes)  # as the console: a route that ended in contact is not repeated
     if vp is None:
         return None

@@ -10,6 +10,7 @@ refuse the same values with the same words. The simulator's options (``--world``
 from __future__ import annotations
 
 import argparse
+import json
 import math
 import os
 import tempfile
@@ -74,6 +75,18 @@ def check_seed(text: Any, perception: str) -> int | None:
     return n
 
 
+def _scene_file(world: Path | None) -> Path | None:
+    """The scene file a world file names (``"scene": "<path>"``, relative to the world's folder), or ``None``
+    (no world, the scene in place, or a world already refused by :func:`load_world_option`)."""
+    if world is None:
+        return None
+    try:
+        raw = json.loads(Path(world).read_text(encoding="utf-8")).get("scene")
+    except (OSError, ValueError, AttributeError):
+        return None
+    return Path(world).parent / raw if isinstance(raw, str) and raw.strip() else None
+
+
 def check_out(out: str | None, world: Path | None) -> Path | None:
     """``--out``'s path, refused before the search when it is a folder, in a missing folder, the world file,
     or in a folder this process cannot write to (a temporary file is made and removed there)."""
@@ -82,7 +95,8 @@ def check_out(out: str | None, world: Path | None) -> Path | None:
     from console.cli.outputs import OutputError, check_output, write_error
 
     try:
-        target = check_output(out, [("world file", world)], example="result.json")
+        target = check_output(out, [("world file", world), ("world's scene file", _scene_file(world))],
+                              example="result.json")
     except OutputError as exc:
         raise CliError(str(exc)) from None
     try:

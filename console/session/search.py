@@ -46,7 +46,7 @@ from planner.search_viewpoints import Viewpoint, cells_in_view
 from console.session.job_thread import JobThread
 from console.session.mapping_job import MappingJob
 from console.session.operator_state import battery_level
-from console.session.search_choose import GridCache, choose_viewpoint
+from console.session.search_choose import GridCache, choose_viewpoint, confirm_choice
 from console.session.search_finish import SearchFinish, is_contact, untried
 from console.session.search_moves import BATTERY, PAUSED, STOPPED, SearchMoves
 from console.session.search_report import battery_low, left_unseen, result_event, step_event, viewpoint_json
@@ -373,7 +373,11 @@ class SearchJob(SearchFinish, SearchMoves, JobThread):
             end = self._budget_end(cfg, t0)
             if end is not None:
                 return end
-            choice = choose_viewpoint(self._session, self._pos(), cfg.target_height, self._looked, self._grids)
+            choice = None
+            if obj is not None:  # seen once, missed from here: a spot elsewhere that faces it over seen space
+                choice = confirm_choice(self._session, self._pos(), obj, self._confirmed_from, self._grids)
+            if choice is None or choice.viewpoint is None:
+                choice = choose_viewpoint(self._session, self._pos(), cfg.target_height, self._looked, self._grids)
             r.choose_seconds.append(round(choice.seconds, 3))
             here = self._pos()
             vp = self.chosen = untried(choice, here, self._contact_routes)

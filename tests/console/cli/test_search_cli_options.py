@@ -115,3 +115,18 @@ def test_the_console_reads_world_the_same_way(capsys, tmp_path: Path) -> None:
         err = capsys.readouterr().err
         assert words in err and "Errno" not in err and "Traceback" not in err, err
     assert not (tmp_path / "s").exists()  # refused before the console started
+
+
+def test_out_may_not_be_the_scene_file_the_world_reads(capsys, tmp_path: Path) -> None:
+    """A copy of the paper's world beside its scene file: --out pointing at that scene file would write the result
+    over the hidden room (the next run then fails to read the world)."""
+    import shutil
+
+    src = REPO / "examples" / "worlds"
+    for name in ("paper_room.world.json", "paper_room.scene.json"):
+        shutil.copy(src / name, tmp_path / name)
+    scene = tmp_path / "paper_room.scene.json"
+    before = scene.read_bytes()
+    err = _bad(capsys, "--target", "robot dog", "--world", str(tmp_path / "paper_room.world.json"), "--out", str(scene))
+    assert "--out" in err and "is the world's scene file" in err, err
+    assert scene.read_bytes() == before
