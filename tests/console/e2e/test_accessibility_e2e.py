@@ -24,6 +24,7 @@ import pytest
 
 from console.app import ConsoleApp, ConsoleConfig, wait_until
 from pipeline.scene import Scene, SceneObject
+from tests.console.e2e.e2e_helpers import copy_and_hear
 from tests.console.e2e.test_console_e2e import BROWSER_ARGS, CHROMIUM, needs_browser
 
 LONG = 90_000  # [ms] generous waits for the page on a loaded 2-core machine
@@ -140,10 +141,8 @@ def test_fields_by_label_disabled_buttons_say_why_return_says_where_and_the_hove
 
                 # --- Copy says so once the clipboard has the summary ------------------------------------------
                 _wait(lambda: "crate" in app.views["summary"].text, "the summary names the crate")
-                copy = page.get_by_role("button", name="Copy", exact=True)
-                copy.scroll_into_view_if_needed()
-                copy.click()
-                page.get_by_role("button", name="Copied ✓").wait_for(timeout=LONG)
+                said = copy_and_hear(page)  # its answer is recorded as it happens: a loaded page draws slowly
+                assert said[0] == "Copied ✓", said
                 assert "crate" in str(page.evaluate("navigator.clipboard.readText()"))
             finally:
                 ctx.close()
