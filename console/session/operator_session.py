@@ -389,6 +389,14 @@ class OperatorRules:
             # one rule for the button and this refusal (console.session.button_rules): obstacle or unseen space below,
             # not flying, link or position lost, a mission under way
             state = button_rules.land_here(r, self._run, ws, self._launch, self._grid, forced)  # type: ignore[attr-defined]
+            if not state.enabled and forced and r is not None and \
+                    rules.vehicle_commands(r, self._run, ws, self._launch, None)["land"].enabled:  # type: ignore[attr-defined]
+                # critical battery over an object: the nearest spot the landing rule fits, before the vehicle's own
+                # failsafe lands it where it hovers (on the object)
+                m = search_landing.land_elsewhere_mission(r, self._grid, self._route, ws,  # type: ignore[attr-defined]
+                                                          f"land-{uuid.uuid4().hex[:6]}")
+                if m is not None:
+                    return m
             if not state.enabled or r is None:
                 raise SessionError(state.reason or "Land here applies when the robot is in the air")
             return rules.land_here_mission(r, ws, f"land-{uuid.uuid4().hex[:6]}")
