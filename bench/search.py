@@ -268,11 +268,15 @@ def main(argv: list[str] | None = None) -> int:
     base = {r["run"]: r for r in rows if r["strategy"] == BASELINE}
     for r in prod:
         b = base.get(r["run"])
-        ratio = r["spl_cost"] / b["spl_cost"] if b and b["spl_cost"] else math.inf
-        ratio_m = r["spl_m"] / b["spl_m"] if b and b["spl_m"] else math.inf
+        if b is None:  # the baseline not run (--strategies): no ratio, no verdict
+            spl = f"SPL not compared ({BASELINE} not run)"
+        else:
+            ratio = r["spl_cost"] / b["spl_cost"] if b["spl_cost"] else math.inf
+            ratio_m = r["spl_m"] / b["spl_m"] if b["spl_m"] else math.inf
+            spl = (f"SPL {ratio_m:.2f}x (m) / {ratio:.2f}x (cost) the frontier's (>= 1.3x: "
+                   f"{'met' if min(ratio, ratio_m) >= 1.3 else 'NOT met'})")
         print(f"targets ({r['run']}): success {100 * r['success']:.1f}% (>= 95 %: {'met' if r['success'] >= 0.95 else 'NOT met'}); "
-              f"SPL {ratio_m:.2f}x (m) / {ratio:.2f}x (cost) the frontier's (>= 1.3x: "
-              f"{'met' if min(ratio, ratio_m) >= 1.3 else 'NOT met'}); collisions {r['collisions']} "
+              f"{spl}; collisions {r['collisions']} "
               f"({'met' if r['collisions'] == 0 else 'NOT met'}); paper's room choice median {r['paper_choose_ms']:.0f} ms")
     if args.json:
         Path(args.json).write_text(json.dumps({"rows": rows, "records": records, "timing": timing,
