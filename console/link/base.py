@@ -427,6 +427,11 @@ class RobotLink(abc.ABC):
         as ``FAILED`` with a message rather than raising.
         """
 
+    def segment_under_way(self) -> bool:
+        """A segment started by :meth:`run_segment` is still running (a look's turn, a mission's leg)."""
+        run = getattr(self, "_run", None)
+        return run is not None and not run.done
+
     @abc.abstractmethod
     def hold(self) -> None:
         """Stop where the robot is (hover in the air, stand on the ground); the running segment

@@ -87,6 +87,7 @@ class VehicleCommands:
                 self._need(self._link, "robot link").disarm()
                 return "motors disarmed"
             mission = self._session.land_mission(forced) if name == "land" else self._session.return_mission()
+            self._stop_bare_segment()
             self._need(self._runner, "mission manager").execute(mission, command=LABELS[name])
         except SessionError:
             raise
@@ -94,6 +95,18 @@ class VehicleCommands:
             raise SessionError(f"{LABELS[name]} refused: {exc}") from None
         spot = mission.segments[-1].end
         return f"{LABELS[name].lower()}: landing at ({spot[0]:.2f}, {spot[1]:.2f})"
+
+    def _stop_bare_segment(self, timeout: float = 10.0) -> None:
+        """Land here / Return outrank a segment run outside any mission (a look's or a search's turn): it is
+        held first, or the mission's first leg would be refused ('a turn segment is still running')."""
+        link = self._link
+        under_way = getattr(link, "segment_under_way", None)
+        if self._session.run.active or under_way is None or not under_way():
+            return
+        link.hold()
+        end = time.monotonic() + timeout
+        while under_way() and time.monotonic() < end:
+            time.sleep(0.02)
 
     def take_control(self, confirm: bool = False) -> str:
         """Take control back from a vehicle flying a mode it chose (RTL, LAND, another ground station).
