@@ -54,9 +54,9 @@ class Workspace:
             if not self.max[a] > self.min[a]:
                 raise GridError(f"workspace max {self.max} must exceed min {self.min} on every axis")
         smallest = min(self.max[a] - self.min[a] for a in range(3))
-        if self.resolution > smallest:  # one cell wider than the room: its centre would lie outside it
-            raise GridError(f"resolution must be at most the workspace's smallest side ({smallest:g} m), "
-                            f"got {self.resolution:g} m")
+        if self.resolution > 2.0 * smallest:  # the first cell's centre (half a cell in) would lie outside the room
+            raise GridError(f"resolution must be at most twice the workspace's smallest side ({smallest:g} m), "
+                            f"so a cell's centre lies inside it, got {self.resolution:g} m")
         if np.prod(self.shape) > 400_000_000:
             raise GridError(f"grid {self.shape} has too many cells; use a coarser resolution")
 

@@ -103,7 +103,7 @@ def test_empty_scene_is_free_but_for_the_robots_size_from_the_edge() -> None:
 
 
 @pytest.mark.parametrize("kw", [dict(resolution=0.0), dict(max=(0.0, 8.0, 3.0)), dict(resolution=float("nan")),
-                                dict(resolution=3.5)])
+                                dict(resolution=6.5)])
 def test_bad_workspace(kw) -> None:
     with pytest.raises(GridError):
         Workspace(**kw)

@@ -43,5 +43,6 @@ def test_plan_refuses_a_cell_larger_than_the_room(capsys, tmp_path: Path) -> Non
         code = ex.code
     assert code == 2
     err = capsys.readouterr().err
-    assert "--bounds / --resolution: resolution must be at most the workspace's smallest side (3 m), got 100 m" in err
+    assert ("--bounds / --resolution: resolution must be at most twice the workspace's smallest side (3 m), so a "
+            "cell's centre lies inside it, got 100 m") in err
     assert "Traceback" not in err and not (tmp_path / "m.json").exists()
