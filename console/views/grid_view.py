@@ -9,8 +9,9 @@ one batched mesh so tens of thousands of cells stay fluid, sorted by why a cell 
 - dangerous (yellow): the robot's clearance around an obstacle (closed) and the dearer band beyond it,
   and the band along the workspace's edge the robot keeps its size from (:attr:`Closed.EDGE`);
 - free (blue, off by default: one click under Layers shows it);
-- unknown (translucent grey, off by default): cells closed only because no capture has seen them,
-  and the clearance and band around unseen space (not around an obstacle).
+- unknown (translucent grey, off by default): cells no capture has seen, and the clearance and band
+  around unseen space (not around an obstacle); the same cells whether unknown space is closed or
+  planned through ("Plan into unknown space" changes the routes, not the colours).
 
 Free cells are drawn on the goal layer only (the floor, or the chosen goal
 altitude): that is the layer a click puts a goal on, and a full 3D lattice of free cells would
@@ -69,14 +70,44 @@ def near_obstacles(grid: PlanningGrid) -> np.ndarray:
     return near
 
 
+HOLDS = (Closed.OBJECT, Closed.SURFACE, Closed.BENEATH, Closed.UNLABELLED)
+"""What a cell itself holds: it wins over its being unseen (as :func:`planner.grid.build_grid` orders them)."""
+
+
+def unseen_cells(grid: PlanningGrid) -> np.ndarray:
+    """Boolean ``[nx, ny, nz]``: cells no capture has seen (outside what a cell holds, :data:`HOLDS`), on the
+    ground layer any cell of the walking column (the robot's body height), whatever the planning rule: with
+    unknown space closed they are :attr:`Closed.UNKNOWN`; with it allowed (``"Plan into unknown space"``) the
+    planner marks them passable but dearer, or clearance or edge cells, so they are read from the grid's
+    known space (:meth:`pipeline.mapping.known_space.KnownSpace.planning_view`). All ``False`` without known
+    space (a hand-made map is fully known)."""
+    reason = grid.reason
+    if reason is None:
+        return np.zeros(grid.state.shape, bool)
+    if grid.rule != "allow":
+        return reason == Closed.UNKNOWN
+    known = (grid.build or {}).get("known")
+    if known is None:
+        return np.zeros(grid.state.shape, bool) if grid.unseen is None else grid.unseen.copy()
+    ws = grid.workspace
+    kstate, _ = known.planning_view(ws.min, ws.shape, ws.resolution, ())
+    unseen = kstate == 0
+    rb = grid.robot if grid.robot is not None else RobotModel.with_radius(float(grid.margin))
+    kh = max(1, min(ws.shape[2], int(math.ceil(rb.height / ws.resolution - 1e-9))))
+    unseen[:, :, 0] = unseen[:, :, :kh].any(axis=2)
+    return unseen & ~np.isin(reason, [int(r) for r in HOLDS])
+
+
 def layer_mask(grid: PlanningGrid, name: str) -> np.ndarray:
     """Boolean ``[nx, ny, nz]`` of the cells the layer ``name`` draws.
 
     ``occupied``: obstacle cells (:data:`OBSTACLE_REASONS`; every occupied cell on a grid without
     reasons); ``dangerous``: dangerous cells and closed clearance cells (:attr:`Closed.CLEARANCE`)
-    near an obstacle (:func:`near_obstacles`); ``free``: free cells; ``unknown``: cells closed only
-    because they were not seen (:attr:`Closed.UNKNOWN`), and the dangerous and clearance cells that
-    only unseen space makes so (no obstacle near).
+    near an obstacle (:func:`near_obstacles`) and the band along the workspace's edge, none of them unseen;
+    ``free``: free cells; ``unknown``: cells no capture has seen (:func:`unseen_cells`: closed as
+    :attr:`Closed.UNKNOWN`, or passable but dearer with "Plan into unknown space"), and the dangerous and
+    clearance cells that only unseen space makes so (no obstacle near). The planning rule changes what may be
+    planned through, not the colours: unseen space is grey (off by default) either way.
     """
     reason = grid.reason
     if name == "free":
@@ -87,9 +118,10 @@ def layer_mask(grid: PlanningGrid, name: str) -> np.ndarray:
             return banded if name == "dangerous" else np.zeros(grid.state.shape, bool)
         banded |= reason == Closed.CLEARANCE
         near = near_obstacles(grid)
-        if name == "dangerous":
-            return (banded & near) | (reason == Closed.EDGE)  # and the robot's size along the workspace's edge
-        return (reason == Closed.UNKNOWN) | (banded & ~near)
+        unseen = unseen_cells(grid)
+        if name == "dangerous":  # and the robot's size along the workspace's edge; never unseen space
+            return ((banded & near) | (reason == Closed.EDGE)) & ~unseen
+        return unseen | (banded & ~near)
     if name == "occupied":
         if reason is None:
             return grid.state == CellState.OCCUPIED

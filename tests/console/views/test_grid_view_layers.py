@@ -96,3 +96,33 @@ def test_red_means_obstacles_not_unknown_space(server: viser.ViserServer, captur
     drawn = _wait_for(view, {"free": free_floor})
     assert free_floor > 0 and drawn["free"] == free_floor, drawn
     assert "free and" not in view._counts.content
+
+
+def _drawn_yellow(view: GridView, grid: object) -> int:
+    """The yellow cells the view draws once it has redrawn ``grid`` (waits on the drawn count, not on time)."""
+    from console.views.grid_view import layer_mask
+
+    want = int(layer_mask(grid, "dangerous").sum())  # type: ignore[arg-type]
+    drawn = _wait_for(view, {"dangerous": want})
+    assert drawn.get("dangerous", 0) == want, (drawn, want)
+    return want
+
+
+def test_planning_into_unknown_space_does_not_paint_it_yellow(server: viser.ViserServer, captured: Session) -> None:
+    view = GridView(server, captured)
+    closed = _drawn_yellow(view, captured.grid)
+    captured.set_plan_unknown(True)
+    grid = captured.grid
+    assert grid.rule == "allow" and grid.unseen is not None and grid.unseen.any()
+    allowed = _drawn_yellow(view, grid)
+    # the first capture leaves most of the room unseen: thousands of cells the planner may now cross (dearer);
+    # they stay grey (the Unknown layer), so yellow stays the band around obstacles and the edge, as with it off
+    unseen_dear = int(((grid.state == CellState.DANGEROUS) & grid.unseen).sum())
+    assert unseen_dear > 300, unseen_dear
+    assert abs(allowed - closed) <= 0.15 * closed, (allowed, closed)
+    from console.views.grid_view import layer_mask, unseen_cells
+
+    assert not (layer_mask(grid, "dangerous") & unseen_cells(grid)).any()
+    assert (layer_mask(grid, "unknown") & grid.unseen).sum() == grid.unseen.sum()  # every one of them grey
+    captured.set_plan_unknown(False)
+    assert _drawn_yellow(view, captured.grid) == closed
