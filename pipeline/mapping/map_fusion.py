@@ -1,7 +1,9 @@
 """One map from many captures: association, uncertainty-weighted fusion, pinned objects, support.
 
 Pure: ``fuse(map, observations) -> (map, report)``. Every position is a box centre in the world
-frame (z up) [m], yaw about +z [rad], sizes ``(w, h, l)`` [m] (see :mod:`pipeline.scene`).
+frame (z up) [m], yaw about +z [rad], sizes ``(w, h, l)`` [m] (see :mod:`pipeline.scene`). This module
+runs the steps; the association is :mod:`pipeline.mapping.map_association`, an object's estimate
+:mod:`pipeline.mapping.map_estimate`, the thresholds and the report :mod:`pipeline.mapping.map_report`.
 
 1. **Rejection.** A view that carries no position (:func:`~pipeline.mapping.observation_sigma.degenerate`:
    camera too close, the box covering the whole image, a sliver at the border) is rejected with its
@@ -43,302 +45,21 @@ frame (z up) [m], yaw about +z [rad], sizes ``(w, h, l)`` [m] (see :mod:`pipelin
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, replace
-from typing import Any, Literal, Sequence
-
-import numpy as np
-from scipy.optimize import linear_sum_assignment
+from dataclasses import replace
+from typing import Any, Sequence
 
 from pipeline.mapping import map_consistency
-from pipeline.mapping.map_extent import RAY_SIGMAS, along_ray_match, keep_inside, next_id, outside_workspace
+from pipeline.mapping.map_association import assign, candidates, class_key, pair_cost
+from pipeline.mapping.map_estimate import history_of, map_cov, refit, sighting
+from pipeline.mapping.map_extent import keep_inside, next_id, outside_workspace
 from pipeline.mapping.map_merge import check_bounds, merge_overlapping, taken_overlap
 from pipeline.mapping.map_misses import drop_unconfirmed, record_misses
-from pipeline.mapping.map_support import footprint_overlap, supported_z, vertical_overlap
-from pipeline.mapping.observation_sigma import (MIN_RANGE, ObservationSigma, degenerate, distance_to_box,
-                                                observation_sigma, ray_covariance)
-from pipeline.scene import Capture, Scene, SceneError, SceneObject, Sighting, Vec3
+from pipeline.mapping.map_report import EXTENT_NOTE, Action, FusionConfig, FusionReport, Outcome
+from pipeline.mapping.map_support import supported_z
+from pipeline.mapping.observation_sigma import MIN_RANGE, degenerate, distance_to_box, observation_sigma
+from pipeline.scene import Capture, Scene, SceneError, SceneObject
 
-Action = Literal["added", "updated", "recorded", "rejected"]
-
-EXTENT_NOTE = "seen in part along the viewing ray: its centre, a guess from the class size, not used"
-"""Why a partial view joined by its extent does not move the object (history note, capture notice)."""
-
-
-@dataclass(frozen=True)
-class FusionConfig:
-    """Thresholds of :func:`fuse`.
-
-    Attributes:
-        gate: Largest squared Mahalanobis distance of an association (11.34: chi-square, 3 degrees
-            of freedom, 99 %).
-        min_overlap: Footprint overlap (over the smaller footprint) that associates whatever the gate
-            says, when the heights overlap by at least ``min_vertical``.
-        min_vertical: Height-range overlap (over the shorter object) for the footprint rule.
-        check_consistency: Hold back a capture that disagrees with the map everywhere.
-    """
-
-    gate: float = 11.34
-    min_overlap: float = 0.3
-    min_vertical: float = 0.5
-    check_consistency: bool = True
-
-    def __post_init__(self) -> None:
-        for name in ("gate", "min_overlap", "min_vertical"):
-            v = getattr(self, name)
-            if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or v <= 0:
-                raise ValueError(f"FusionConfig.{name}: must be a finite number > 0, got {v!r}")
-
-
-@dataclass(frozen=True)
-class Outcome:
-    """What happened to one observation.
-
-    Attributes:
-        observation: Its id in the new capture.
-        label: Its class.
-        action: ``added`` (a new object), ``updated`` (fused into ``object_id``), ``recorded`` (matched
-            the pinned ``object_id``, or joined it by extent only: kept in its history, ``reason``
-            says why) or ``rejected`` (``reason`` says why).
-        object_id: The map object it became or matched, if any.
-        reason: Why rejected (or recorded only).
-        sigma: Its along-ray 1-sigma [m].
-    """
-
-    observation: str
-    label: str
-    action: Action
-    object_id: str | None = None
-    reason: str = ""
-    sigma: float = math.nan
-
-
-@dataclass(frozen=True)
-class FusionReport:
-    """What :func:`fuse` did: one :class:`Outcome` per observation, corrections, hold-back."""
-
-    outcomes: tuple[Outcome, ...] = ()
-    corrections: tuple[tuple[str, str], ...] = ()
-    """``(object id, what was corrected)`` for objects moved onto their support."""
-    held_back: str | None = None
-    """Why the capture was not merged (the map is unchanged), ``None`` if it was."""
-    merged: tuple[tuple[str, str], ...] = ()
-    """``(kept id, removed id)``: two objects of one class that overlapped, merged (one object mapped twice)."""
-    removed: tuple[tuple[str, str], ...] = ()
-    """``(id, why)``: objects seen by one capture only that later captures did not see where they should have."""
-
-    def ids(self, action: Action) -> list[str]:
-        """Map object ids (``observation`` ids for ``rejected``) with this outcome."""
-        return [o.object_id or o.observation for o in self.outcomes if o.action == action]
-
-    @property
-    def added(self) -> list[str]:
-        return self.ids("added")
-
-    @property
-    def updated(self) -> list[str]:
-        return self.ids("updated")
-
-    @property
-    def rejected(self) -> list[Outcome]:
-        return [o for o in self.outcomes if o.action == "rejected"]
-
-    @property
-    def not_added(self) -> set[str]:
-        """Observation ids rejected without a map object (outside the workspace, a sliver...): a caller
-        that merges the capture again (the console's spawn) leaves them out."""
-        return {o.observation for o in self.outcomes if o.action == "rejected" and o.object_id is None}
-
-    def notes(self) -> list[str]:
-        """Operator-facing lines: rejections, pinned objects seen again, corrections, hold-back."""
-        out = [f"{o.observation} ({o.label}) not used: {o.reason}" for o in self.rejected]
-        out += [f"{o.object_id} is pinned: seen again at the capture, not moved" if o.reason != EXTENT_NOTE
-                else f"{o.object_id}: {o.reason}" for o in self.outcomes if o.action == "recorded"]
-        out += [f"{oid}: {what}" for oid, what in self.corrections]
-        out += [f"{gone} merged into {kept}: they overlapped (one object mapped twice)" for kept, gone in self.merged]
-        out += [f"{oid}: {why}" for oid, why in self.removed]
-        if self.held_back:
-            out.insert(0, f"capture held back: {self.held_back}")
-        return out
-
-
-def class_key(label: str, catalog: Any = None) -> str:
-    """The catalog class a label names (synonyms resolved), else the label normalised."""
-    from pipeline.catalog import normalize_label
-
-    if catalog is not None:
-        entry = catalog.lookup(label)
-        if entry is not None:
-            return str(entry.name)
-    return normalize_label(label)
-
-
-# --- per-object estimates -----------------------------------------------------------------------------
-
-
-def _sighting(obj: SceneObject, capture: Capture | None, used: bool = True, note: str = "",
-              others: Sequence[SceneObject] = ()) -> Sighting:
-    sig = observation_sigma(obj, capture, others)
-    if sig.factors and not note:
-        note = "sigma grown: " + ", ".join(sig.factors)
-    return Sighting(capture=obj.source.capture, position=obj.position, yaw=obj.yaw, size=obj.size,
-                    sigma=(sig.along, sig.across, sig.yaw), camera=sig.camera, distance=sig.distance,
-                    used=used, note=note)
-
-
-def _cov(s: Sighting) -> np.ndarray:
-    if s.camera is None:
-        return np.eye(3) * s.sigma[0] ** 2
-    return ray_covariance(s.position, s.camera, s.sigma[0], s.sigma[1])
-
-
-def _estimate(sightings: Sequence[Sighting]) -> tuple[np.ndarray, np.ndarray, float, Vec3]:
-    """``(position, covariance, yaw, size)`` fused from the used sightings.
-
-    The position is the mean weighted by ``1 / max(along, across)^2`` (a view is weighed by its weaker
-    direction: an object cut on both sides is placed across the ray no better than its extent; a convex combination: it stays among the
-    views even when their across-ray errors disagree, which the information-weighted mean of narrow
-    ray covariances would not); its covariance (for the association gate) ``(sum R_k^-1)^-1``, the
-    views' ray covariances combined: narrow across the rays it was seen along.
-    """
-    w = np.array([1.0 / max(s.sigma[0], s.sigma[1]) ** 2 for s in sightings])
-    pos = (w[:, None] * np.array([s.position for s in sightings], dtype=np.float64)).sum(0) / w.sum()
-    cov = np.linalg.inv(sum(np.linalg.inv(_cov(s)) for s in sightings))
-    wy = np.array([1.0 / s.sigma[2] ** 2 for s in sightings])
-    c2 = float(np.sum(wy * np.cos([2 * s.yaw for s in sightings])))
-    s2 = float(np.sum(wy * np.sin([2 * s.yaw for s in sightings])))
-    yaw = 0.5 * math.atan2(s2, c2)
-    ref = sightings[int(np.argmax(wy))].yaw  # keep the heading of the best view (not its half-turn twin)
-    if math.cos(yaw - ref) < 0:
-        yaw += math.pi
-    yaw = math.atan2(math.sin(yaw), math.cos(yaw))
-    size = tuple(float(v) for v in (w[:, None] * np.array([s.size for s in sightings])).sum(0) / w.sum())
-    return pos, cov, yaw, size  # type: ignore[return-value]
-
-
-def _history(obj: SceneObject, captures: dict[str, Capture]) -> tuple[Sighting, ...]:
-    """The object's history, or one sighting of the object as it stands when it has none."""
-    if obj.history:
-        return obj.history
-    return (_sighting(obj, captures.get(obj.source.capture or "")),)
-
-
-def _map_cov(obj: SceneObject, captures: dict[str, Capture]) -> np.ndarray:
-    used = [s for s in _history(obj, captures) if s.used]
-    if obj.is_pinned or not used:
-        return np.eye(3) * 0.03**2
-    return _estimate(used)[1]
-
-
-# --- association ----------------------------------------------------------------------------------------
-
-
-def _cost(obs: SceneObject, r_obs: np.ndarray, obj: SceneObject, p_obj: np.ndarray, cfg: FusionConfig,
-          captures: dict[str, Capture]) -> float:
-    """Squared Mahalanobis distance of a candidate pair, ``inf`` if not a candidate; a footprint overlap
-    costs the gate."""
-    points = [(np.asarray(obj.position), p_obj)]
-    if obj.is_pinned:  # also where the operator's object was seen before it was pinned
-        points += [(np.asarray(s.position), _cov(s)) for s in _history(obj, captures) if s.capture]
-    best = math.inf
-    for pos, cov in points:
-        d = np.asarray(obs.position) - pos
-        best = min(best, float(d @ np.linalg.solve(cov + r_obs, d)))
-    if best <= cfg.gate:
-        return best
-    if vertical_overlap(obs, obj) >= cfg.min_vertical and footprint_overlap(obs, obj) >= cfg.min_overlap:
-        return cfg.gate
-    return math.inf
-
-
-def _candidates(obs: Sequence[SceneObject], covs: Sequence[np.ndarray], objects: Sequence[SceneObject],
-                p_objs: Sequence[np.ndarray], cfg: FusionConfig, captures: dict[str, Capture],
-                sigs: Sequence[ObservationSigma] = ()) -> np.ndarray:
-    """``[len(obs), len(objects)]`` mask of the pairs :func:`_cost` may find finite, from bounds alone
-    (numpy over all pairs, so the exact cost runs on a few instead of every pair: a second drop of a
-    1900-object file took 184 s): the squared Mahalanobis distance is at least ``|d|^2 / (lmax(P) +
-    lmax(R))``, footprints overlap only when their centres lie within both half-diagonals, and a partial
-    view's ray meets a box only within both 3D half-diagonals and its sigmas' reach. A pinned
-    object is also tried where it was seen before, as :func:`_cost` does."""
-    pts, lams, owner = [], [], []
-    for j, (m, p) in enumerate(zip(objects, p_objs)):
-        points = [(m.position, p)]
-        if m.is_pinned:
-            points += [(s.position, _cov(s)) for s in _history(m, captures) if s.capture]
-        for pos, cov in points:
-            pts.append(pos)
-            lams.append(float(np.linalg.eigvalsh(cov).max()))
-            owner.append(j)
-    po = np.array([o.position for o in obs], dtype=np.float64)
-    pm = np.array(pts, dtype=np.float64)
-    lam_o = np.array([float(np.linalg.eigvalsh(r).max()) for r in covs])
-    lam_m = np.array(lams)
-    near = np.zeros((len(obs), len(pts)), dtype=bool)
-    for i0 in range(0, len(obs), 256):  # in blocks: [256, n_points, 3] at most
-        d = pm[None, :, :] - po[i0:i0 + 256, None, :]
-        near[i0:i0 + 256] = (d * d).sum(axis=2) <= cfg.gate * (lam_o[i0:i0 + 256, None] + lam_m[None, :]) \
-            * (1 + 1e-9) + 1e-12
-    gate = np.zeros((len(obs), len(objects)), dtype=bool)
-    np.logical_or.at(gate.T, np.array(owner), near.T)
-    if cfg.min_overlap <= 0:
-        return np.ones_like(gate)
-    rad_o = np.array([math.hypot(o.size[0], o.size[2]) / 2 for o in obs])
-    rad_m = np.array([math.hypot(m.size[0], m.size[2]) / 2 for m in objects])
-    pc = np.array([m.position for m in objects], dtype=np.float64)
-    dh = np.hypot(pc[None, :, 0] - po[:, None, 0], pc[None, :, 1] - po[:, None, 1])
-    gate |= dh <= rad_o[:, None] + rad_m[None, :] + 1e-9
-    if sigs:
-        reach = np.array([np.linalg.norm(o.size) / 2 + RAY_SIGMAS * (g.along + g.across) if g.partial else -np.inf
-                          for o, g in zip(obs, sigs)])
-        d3 = np.linalg.norm(pc[None, :, :] - po[:, None, :], axis=2)
-        gate |= d3 <= reach[:, None] + np.array([np.linalg.norm(m.size) / 2 for m in objects])[None, :]
-    return gate
-
-
-def _assign(obs: Sequence[SceneObject], covs: Sequence[np.ndarray], objects: Sequence[SceneObject],
-            cfg: FusionConfig, captures: dict[str, Capture], keys: dict[str, str],
-            taken: set[int], sigs: Sequence[ObservationSigma], by_extent: set[int] | None = None) -> dict[int, int]:
-    """Observation index -> object index, one global assignment over the candidate pairs; the
-    observations matched only by their extent along the viewing ray are added to ``by_extent``."""
-    if not obs or not objects:
-        return {}
-    ray_pairs: set[tuple[int, int]] = set()
-    big = 1e9
-    cost = np.full((len(obs), len(objects)), big)
-    p_objs = [_map_cov(o, captures) for o in objects]
-    cand = _candidates(obs, covs, objects, p_objs, cfg, captures, sigs)
-    for i, (o, r) in enumerate(zip(obs, covs)):
-        for j in np.flatnonzero(cand[i]).tolist():
-            m = objects[j]
-            if j in taken or keys[o.label] != keys[m.label]:
-                continue
-            c = _cost(o, r, m, p_objs[j], cfg, captures)
-            if math.isfinite(c):
-                cost[i, j] = c
-        g = sigs[i] if sigs else None
-        if g is not None and g.partial and not (cost[i] < big).any():  # a partial view that matched nothing:
-            ext = [j for j in np.flatnonzero(cand[i]).tolist() if j not in taken and keys[o.label] == keys[objects[j].label]
-                   and along_ray_match(o, g.camera, g.across, objects[j])]
-            if len(ext) == 1:  # its ray meets one object of its class (two, e.g. a line of boxes: ambiguous)
-                cost[i, ext[0]] = cfg.gate
-                ray_pairs.add((i, ext[0]))
-    rows, cols = linear_sum_assignment(cost)
-    out = {int(i): int(j) for i, j in zip(rows, cols) if cost[i, j] < big}
-    if by_extent is not None:
-        by_extent |= {i for i, j in out.items() if (i, j) in ray_pairs}
-    return out
-
-
-# --- the fusion -------------------------------------------------------------------------------------------
-
-
-def _refit(obj: SceneObject, history: tuple[Sighting, ...], newest: SceneObject) -> SceneObject:
-    used = [s for s in history if s.used]
-    if not used:
-        return replace(obj, history=history)
-    pos, _, yaw, size = _estimate(used)
-    return replace(obj, position=tuple(float(v) for v in pos), yaw=yaw,  # type: ignore[arg-type]
-                   size=size if not obj.size_known else obj.size, history=history,
-                   score=max(obj.score, newest.score), source=newest.source, flags=())
+_candidates, _cost, _map_cov = candidates, pair_cost, map_cov  # the names tests/planner/test_graph_index.py uses
 
 
 def fuse(scene: Scene, observations: Scene, *, catalog: Any = None, config: FusionConfig | None = None,
@@ -390,11 +111,11 @@ def fuse(scene: Scene, observations: Scene, *, catalog: Any = None, config: Fusi
     sig = {i: observation_sigma(o, cap(o), obs) for i, o in enumerate(obs)}
     covs = {i: sig[i].gate_covariance(o.position) for i, o in enumerate(obs)}
     ray: set[int] = set()
-    first = _assign([obs[i] for i in good], [covs[i] for i in good], objects, cfg, captures, keys, set(),
+    first = assign([obs[i] for i in good], [covs[i] for i in good], objects, cfg, captures, keys, set(),
                     [sig[i] for i in good], ray)
     match = {good[a]: j for a, j in first.items()}
     by_extent = {good[a] for a in ray}
-    second = _assign([obs[i] for i in bad], [covs[i] for i in bad], objects, cfg, captures, keys, set(match.values()),
+    second = assign([obs[i] for i in bad], [covs[i] for i in bad], objects, cfg, captures, keys, set(match.values()),
                      [sig[i] for i in bad])
     match.update({bad[a]: j for a, j in second.items()})
 
@@ -432,32 +153,32 @@ def fuse(scene: Scene, observations: Scene, *, catalog: Any = None, config: Fusi
                 outcomes.append(Outcome(o.id, o.label, "rejected", None, reason, sig[i].along))
                 continue
             new_id = next_id(o.id, o.label, index)
-            objects.append(replace(o, id=new_id, history=(_sighting(o, c, others=obs),), pinned=False, flags=()))
+            objects.append(replace(o, id=new_id, history=(sighting(o, c, others=obs),), pinned=False, flags=()))
             index[new_id] = len(objects) - 1
             touched.add(new_id)
             outcomes.append(Outcome(o.id, o.label, "added", new_id, "", sig[i].along))
             continue
         m = objects[j]
-        old = tuple(s for s in _history(m, captures) if o.source.capture is None or s.capture != o.source.capture
+        old = tuple(s for s in history_of(m, captures) if o.source.capture is None or s.capture != o.source.capture
                     or not s.used)
         if reason is None and i in by_extent and not m.is_pinned:
             note = EXTENT_NOTE
-            objects[j] = replace(m, history=old + (_sighting(o, c, used=False, note=note, others=obs),))
+            objects[j] = replace(m, history=old + (sighting(o, c, used=False, note=note, others=obs),))
             outcomes.append(Outcome(o.id, o.label, "recorded", m.id, note, sig[i].along))
             continue
         if reason is not None or m.is_pinned:
             note = reason or "pinned: recorded, not moved"
-            objects[j] = replace(m, history=old + (_sighting(o, c, used=False, note=note, others=obs),))
+            objects[j] = replace(m, history=old + (sighting(o, c, used=False, note=note, others=obs),))
             action: Action = "rejected" if reason is not None else "recorded"
             outcomes.append(Outcome(o.id, o.label, action, m.id, note, sig[i].along))
             continue
-        history = old + (_sighting(o, c, others=obs),)
-        objects[j] = _refit(m, history, o)
+        history = old + (sighting(o, c, others=obs),)
+        objects[j] = refit(m, history, o)
         touched.add(m.id)
         outcomes.append(Outcome(o.id, o.label, "updated", m.id, "", sig[i].along))
 
     merged = merge_overlapping(objects, touched, keys, cfg.min_overlap, cfg.min_vertical,
-                               lambda a, b: _refit(a, _history(a, captures) + _history(b, captures), a),
+                               lambda a, b: refit(a, history_of(a, captures) + history_of(b, captures), a),
                                {o.id for o in scene.objects})
     record_misses(objects, observations.captures, touched | {o.object_id for o in outcomes if o.object_id})
     removed = drop_unconfirmed(objects)
@@ -488,3 +209,6 @@ def _support(objects: list[SceneObject], touched: set[str]) -> list[tuple[str, s
 def pinned(obj: SceneObject, value: bool = True) -> SceneObject:
     """A copy confirmed (``value``) or released by the operator."""
     return replace(obj, pinned=value)
+
+
+__all__ = ["EXTENT_NOTE", "Action", "FusionConfig", "FusionReport", "Outcome", "class_key", "fuse", "pinned"]
