@@ -3,8 +3,10 @@
 The Undo button belongs to the objects panel (:class:`console.views.objects_view.ObjectsView`); the
 Redo button is placed right after it (viser orders a container's elements by ``order``), and both
 keys are viser commands (also listed in its command palette, Ctrl+K). The session does the work
-(:meth:`console.session.session.Session.undo_edit` / ``redo_edit``); the button shows what a redo
-puts back (``Redo move box-3``) and is off when there is nothing to redo.
+(:meth:`console.session.session.Session.undo_edit` / ``redo_edit``). Both buttons say what they would do
+(``Undo move box-3``, ``Redo move box-3``) and are off when there is nothing to do; they are set when the
+view is built too, so a session restored at start-up (its ``history.json`` read back before the page
+existed) shows its Undo and Redo at once.
 """
 
 from __future__ import annotations
@@ -31,6 +33,7 @@ class RedoView:
 
     def __init__(self, server: viser.ViserServer, session: Session, undo_button: Any = None) -> None:
         self._session = session
+        self._undo_button = undo_button
         order = getattr(undo_button, "order", None)
         self.button = server.gui.add_button(
             "Redo", icon=viser.Icon.ARROW_FORWARD_UP, color="gray", disabled=True,
@@ -49,10 +52,10 @@ class RedoView:
         self.sync()
 
     def sync(self) -> None:
-        """Show what Redo would put back, or turn it off."""
-        what = self._session.redo_label
-        self.button.disabled = what is None
-        self.button.label = "Redo" if what is None else f"Redo {what}"[:LABEL_CHARS]
+        """Show what Undo would take away and Redo would put back, or turn each off."""
+        if self._undo_button is not None:
+            _show(self._undo_button, "Undo", self._session.undo_label)
+        _show(self.button, "Redo", self._session.redo_label)
 
     def undo(self, client: Any) -> None:
         try:
@@ -69,3 +72,12 @@ class RedoView:
     def _on_event(self, topic: str, _payload: Any) -> None:
         if topic in (SCENE, CAPTURE, ROUTE, MISSION):
             self.sync()
+
+
+def _show(button: Any, verb: str, what: str | None) -> None:
+    """``verb`` and what it acts on (``Undo move box-3``, cut to :data:`LABEL_CHARS`), off when there is nothing."""
+    label = verb if what is None else f"{verb} {what}"[:LABEL_CHARS]
+    if button.label != label:
+        button.label = label
+    if button.disabled != (what is None):
+        button.disabled = what is None
