@@ -9,7 +9,7 @@ closed first: notices never stack over the 3D view. The page shows them at the b
 3D view, beside the control panel, never over the middle or the upper left where the operator
 clicks goals, nor over the panel's mission buttons.
 
-A capture's notice is short: a body longer than :data:`SHORT_CHARS` (subjects in :data:`SHORTENED`) is cut
+A capture's notice (and the Find panel's refusal of a target the perception cannot name) is short: a body longer than :data:`SHORT_CHARS` (subjects in :data:`SHORTENED`) is cut
 to its summary (its first clause, up to the first "; ", or its first words) and says where the rest is; the whole text goes to the listeners of
 :func:`on_long_notice` (the *Notices: full text* expander under **Capture & map**,
 :mod:`console.views.notice_details`), one click away.
@@ -51,9 +51,10 @@ SUBJECTS = (
 SHORT_CHARS = 150
 """Longest notice body shown whole [characters] (about three lines of a notice); longer ones show their summary."""
 
-SHORTENED = ("capture", "Scene file spawned")
+SHORTENED = ("capture", "Scene file spawned", "find")
 """Subjects whose long notices are shown as their summary (a capture's or a scene file's report: the objects
-seen, then a note per object); other notices (a refusal and its reason) are shown whole."""
+seen, then a note per object; the Find panel's refusal of a target the perception cannot name, then every class
+it can); other notices (a refusal and its reason) are shown whole."""
 
 DETAILS_WHERE = "full text: Notices, under Capture & map"
 """What a shortened notice says about where its whole text is."""

@@ -4,11 +4,11 @@ viser draws a label as a billboard of constant screen size (``12 px * font_scree
 whatever the distance). Every tab gets its own label nodes (``client.scene``) in *layers*: the mapped
 objects' labels (``objects``) and the mission's take-off and landing spots (``paths``, set by the paths
 view). Whenever a tab's camera moves, or the robot or another label moves, the labels are projected into
-that tab's picture and kept greedily, most important first (the selected object's, then the paths', then
-the nearest objects'), skipping any whose box would overlap one already kept, up to :data:`MAX_LABELS`.
+that tab's picture and kept greedily, most important first (the selected object's, then the search's next
+viewpoint (``search``, set by the search view), then the paths', then the nearest objects'), skipping any whose
+box would overlap one already kept, up to :data:`MAX_LABELS`.
 
-Labels every tab shares (server-wide nodes: the robot's, the search's next viewpoint, the agent's, the
-origin's) are always drawn: the decluttered ones leave them free (:func:`fixed_labels` reads them, with
+Labels every tab shares (server-wide nodes: the robot's, the agent's, the origin's) are always drawn and win: the decluttered ones leave them free (:func:`fixed_labels` reads them, with
 their text and where they are now, from the viser server), and the goal markers too (:meth:`ClientLabels.set_markers`).
 Zooming in spreads the objects apart and shows more labels; selecting an object always shows its label.
 
@@ -47,8 +47,12 @@ GAP_PX = 3.0
 MARKER_PX = 18.0
 """Side of the square kept free around a goal marker [CSS px] (a 0.07-0.08 m sphere seen from the default view)."""
 
-LAYERS = ("paths", "objects")
-"""Label layers in order of importance (after the selected object's label, always first)."""
+LAYERS = ("search", "paths", "objects")
+"""Label layers in order of importance (after the selected object's label, always first): the search's next
+viewpoint, the mission's take-off and landing spots, the mapped objects."""
+
+MARKER_LAYERS = ("search", "paths")
+"""Layers whose labels name a marker (a take-off spot, the viewpoint the robot goes to): they may touch it."""
 
 Rect = tuple[float, float, float, float]  # x0, y0, x1, y1 [px], x right, y down
 
@@ -367,7 +371,7 @@ class ClientLabels:
         return (0.0, 0.0, W, H)
 
     def set_enabled(self, enabled: bool) -> None:
-        """Show (decluttered) or hide every object label (the paths' labels stay)."""
+        """Show (decluttered) or hide every object label (the search's and the paths' labels stay)."""
         with self._lock:
             self._enabled = bool(enabled)
             self.refresh_all()
@@ -404,7 +408,7 @@ class ClientLabels:
                     markers = [m for pts in self._markers.values() for m in pts]
                     camera = tab["client"].camera
                     picked = choose(spots, camera, self._selected(), reserved, markers=markers, rank=rank,
-                                    marker_exempt=[i for i, (la, _) in enumerate(layered) if la == "paths"],
+                                    marker_exempt=[i for i, (la, _) in enumerate(layered) if la in MARKER_LAYERS],
                                     frame=self._frame(camera))
                     chosen = [(index[id(spots[i])], rect) for i, rect in picked]
                 except Exception:  # noqa: BLE001 - no camera state from the tab yet: show none until it moves

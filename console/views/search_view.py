@@ -1,6 +1,11 @@
 """The Find panel: what to find, the mode and budgets, Start / Approve step / Pause / Resume / Stop,
 and the chosen viewpoint drawn in the scene with its gain and cost.
 
+The viewpoint's label ("next viewpoint: gain 3.1 m³, cost 4.2") is drawn per tab through the label declutter
+(:mod:`console.views.object_labels`, layer ``search``): it never sits on the robot's label (which wins) nor on
+another label. A refusal to start (a target the perception cannot name, with the classes it can) pops up as its
+summary; the whole text is in *Notices: full text* (:mod:`console.views.notice_details`).
+
 The buttons turn clicks into :class:`~console.session.search.SearchJob` calls; the steps show in
 the panel's line and in the Map folder's job line ("Find: robot dog: next viewpoint ...").
 """
@@ -19,6 +24,7 @@ from console.session.search_inputs import PANEL_NAMES, search_config
 from console.session.search_types import BATTERY_RESERVE, MAX_CAPTURES, MAX_TIME, MIN_TIME
 from console.session.session import JOB, RUN, SEARCH, Session, SessionError
 from console.views.client_notice import tell
+from console.views.object_labels import LabelSpot, board_for
 from console.views.refresher import Refresher
 
 
@@ -88,7 +94,7 @@ class SearchView:
         try:
             action()
         except SessionError as exc:
-            tell(event.client, "Not possible", str(exc), "yellow", 7.0)
+            tell(event.client, "Not possible", str(exc), "yellow", 7.0, about="find")  # a long one: its summary
         self.refresh()
 
     def _on_event(self, topic: str, payload: Any) -> None:
@@ -139,6 +145,15 @@ class SearchView:
                 self._marker = self._server.scene.add_line_segments(
                     "/search/viewpoint", points=np.array([[e, tip]], dtype=np.float32),
                     colors=(255, 140, 0), thickness=0.04)
-                self._label = self._server.scene.add_label(
-                    "/search/viewpoint_why", f"next viewpoint: gain {vp.gain:.1f} m³, cost {vp.cost:.1f}",
-                    position=tuple(float(v) for v in e))
+            self._show_label(vp)
+
+    def _show_label(self, vp: Any) -> None:
+        """The viewpoint's label (``None``: none), in every tab's declutter (server-wide only without one)."""
+        spots = [] if vp is None else [LabelSpot(f"next viewpoint: gain {vp.gain:.1f} m³, cost {vp.cost:.1f}",
+                                                 tuple(float(v) for v in vp.eye), (), "top-left")]
+        board = board_for(self._server)
+        if board is not None:
+            board.set_layer("search", spots)
+        elif spots:
+            self._label = self._server.scene.add_label("/search/viewpoint_why", spots[0].text,
+                                                       position=spots[0].position, anchor="top-left")

@@ -101,3 +101,29 @@ def test_good_fields_start_the_search_they_show(panel) -> None:
     cfg = job.started[0]
     assert (cfg.target, cfg.mode, cfg.max_captures, cfg.max_time, cfg.min_battery, cfg.target_height) == (
         "quadruped", "step", 12, 150.0, 0.4, 0.4)
+
+
+@pytest.mark.parametrize("target, head", [
+    ("unicorn", "Find: 'unicorn' is not an object the perception can name"),
+    ("a red bicycle", "Find: 'a red bicycle' is not an object the perception can name (did you mean 'bicycle'?)"),
+])
+def test_an_unknown_target_is_refused_in_a_short_notice_with_the_classes_one_click_away(panel, target, head) -> None:
+    from console.views.client_notice import DETAILS_WHERE, forget
+    from console.views.notice_details import NoticeDetails
+
+    view, job = panel
+    details = NoticeDetails(view._server)
+    view.target.value = target
+    tab = _Tab()
+    tab._viser_server, tab.client_id = view._server, 7301  # type: ignore[attr-defined]
+    try:
+        view._act(SimpleNamespace(client=tab), view._start)
+    finally:
+        forget(7301)
+    whole = _cli_words(target=target)  # ~750 characters: the reason, then every class the perception can name
+    assert len(whole) > 600 and job.started == []
+    assert len(tab.notices) == 1 and tab.notices[0][0] == "Not possible", tab.notices
+    body = tab.notices[0][1]
+    assert len(body) <= 150 and body == f"{head} … ({DETAILS_WHERE})", body
+    assert "<li>Find: " in details.text and "robot dog, table, chair" in details.text  # the whole text, one click away
+    assert "add it to the catalog (assets/catalog.toml" in details.text and details._folder.visible
