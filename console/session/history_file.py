@@ -17,14 +17,13 @@ from __future__ import annotations
 
 import json
 import logging
-import shutil
-import time
 from pathlib import Path
 from typing import Any, Sequence
 
 from pipeline.scene import scene_to_dict, write_text_atomic
 from planner.grid import Workspace
 
+from console.session.file_aside import put_aside
 from console.session.history import SceneState
 from console.session.history_schema import HISTORY_KIND, HISTORY_VERSION, outline_errors, step_errors
 from console.session.session_parse import SESSION_VERSION, parse_saved
@@ -119,18 +118,11 @@ class HistoryWriter:
 
 
 def set_aside(path: Path, move: bool) -> str:
-    """Move (or copy) a bad history file to ``history.json.unreadable-<time>`` beside it; returns what the
-    operator is told (``kept aside as history.json.unreadable-...``, ``a copy kept as ...``, or why not)."""
-    stamp = time.strftime("%Y%m%d-%H%M%S")
-    kept, n = path.with_name(f"{path.name}.unreadable-{stamp}"), 1
-    while kept.exists():
-        n += 1
-        kept = path.with_name(f"{path.name}.unreadable-{stamp}-{n}")
+    """Move (or copy) a bad history file to ``history.json.unreadable-<time>`` beside it
+    (:func:`console.session.file_aside.put_aside`); returns what the operator is told (``kept aside as
+    history.json.unreadable-...``, ``a copy kept as ...``, or why not). Never raises for the folder."""
     try:
-        if move:
-            path.replace(kept)
-        else:
-            shutil.copy2(path, kept)
+        kept = put_aside(path, move)
     except OSError as exc:
         return f"not kept aside: {(exc.strerror or str(exc)).lower()}"
     return f"{'kept aside' if move else 'a copy kept'} as {kept.name}"

@@ -20,7 +20,6 @@ from __future__ import annotations
 import json
 import logging
 import re
-import shutil
 import time
 from dataclasses import replace
 from pathlib import Path
@@ -34,6 +33,7 @@ from planner.route import Route
 from console.session.capture_files import (
     highest_capture_number, numbered_capture_id, read_capture_files, write_capture_files,
 )
+from console.session.file_aside import put_aside
 from console.session.history_file import HISTORY_FILE, HistoryWriter, read_history_file
 from console.session.session_core import SessionCore
 from console.session.session_parse import SESSION_VERSION, SavedSession, parse_saved
@@ -171,27 +171,19 @@ def read_session_file(path: Path, folder: Path) -> Any:
 
 
 def keep_aside(path: Path, reason: str, move: bool) -> Path:
-    """Move (or copy) a bad session file to ``<name>.unreadable-<time>`` beside it; returns the new path.
+    """Move (or copy) a bad session file to ``<name>.unreadable-<time>`` beside it
+    (:func:`console.session.file_aside.put_aside`); returns the new path.
 
     Raises :class:`SessionError` saying what to do when the folder does not allow it.
     """
-    kept = path.with_name(f"{path.name}.unreadable-{time.strftime('%Y%m%d-%H%M%S')}")
-    n = 1
-    while kept.exists():
-        n += 1
-        kept = path.with_name(f"{path.name}.unreadable-{time.strftime('%Y%m%d-%H%M%S')}-{n}")
     try:
-        if move:
-            path.replace(kept)
-        else:
-            shutil.copy2(path, kept)
+        return put_aside(path, move)
     except OSError as exc:
         raise SessionError(
             f"the session in {path.parent} is corrupt ({reason}) and cannot be kept aside "
             f"({exc.strerror or exc}): start with --fresh to begin with an empty map (the file is left "
             f"as it is and nothing is saved over it while the folder stays read-only), or with "
             f"--session DIR to use another folder") from None
-    return kept
 
 
 class Persistence(SessionCore):
