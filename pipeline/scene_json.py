@@ -126,6 +126,7 @@ def scene_to_dict(scene: Scene) -> dict[str, Any]:
             }
             for c in scene.captures
         ],
+        **({"last_ids": dict(scene.last_ids)} if scene.last_ids else {}),
     }
 
 
@@ -310,7 +311,22 @@ def scene_from_dict(data: Any) -> Scene:
                 models={str(k): str(v) for k, v in models.items()},
             )
         )
-    return Scene(objects=tuple(objects), captures=tuple(captures), version=SCENE_VERSION)
+    return Scene(objects=tuple(objects), captures=tuple(captures), version=SCENE_VERSION,
+                 last_ids=_last_ids_from(root.raw("last_ids", required=False)))
+
+
+def _last_ids_from(raw: Any) -> dict[str, int]:
+    """``last_ids``: class name -> highest id number it has had (a non-negative integer); ``{}`` if absent."""
+    if raw is None:
+        return {}
+    if not isinstance(raw, dict):
+        raise SceneError("last_ids", f"must be an object of class name -> integer, got {type(raw).__name__}")
+    out: dict[str, int] = {}
+    for k, v in raw.items():
+        if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or v < 0 or int(v) != v:
+            raise SceneError(f"last_ids.{k}", f"must be a non-negative integer, got {v!r}")
+        out[str(k)] = int(v)
+    return out
 
 
 def scene_from_json(text: str) -> Scene:

@@ -172,6 +172,10 @@ class Scene:
     objects: tuple[SceneObject, ...] = ()
     captures: tuple[Capture, ...] = ()
     version: int = SCENE_VERSION
+    last_ids: Mapping[str, int] = field(default_factory=dict)
+    """Highest number each class's ids have had (``{"cardboard_box": 7}`` once ``cardboard_box-7`` was
+    mapped), kept after the object is merged or removed: the map fusion numbers new objects above it,
+    so an id is never given to another object (:func:`pipeline.mapping.map_extent.next_id`)."""
 
     def __post_init__(self) -> None:
         ids = [o.id for o in self.objects]

@@ -133,6 +133,9 @@ SCENE_SCHEMA: dict[str, Any] = {
         "units": {"type": "string"},
         "objects": {"type": "array", "items": _OBJECT},
         "captures": {"type": "array", "items": _CAPTURE},
+        "last_ids": {"type": "object", "additionalProperties": {"type": "integer", "minimum": 0},
+                     "description": "highest number each class's ids have had (cardboard_box-7: 7), kept after "
+                                    "the object is merged or removed: new objects are numbered above it"},
     },
 }
 """The scene file's schema (the published ``docs/schemas/scene.schema.json``)."""

@@ -15,14 +15,15 @@ centre, size ``(w, h, l)`` and yaw about +z [rad] (the length ``l`` along the ya
   why).
 - :func:`keep_inside`: an update that carries an object's centre out of the workspace's floor plan is
   undone to the nearest point inside, and flagged.
-- :func:`next_id`: a new object's id is the next free number of its class (``cardboard_box-7``).
+- :func:`next_id`: a new object's id is the next number of its class (``cardboard_box-7``), above every
+  number the class has had (:func:`id_numbers`, kept in the map's ``last_ids``): an id is never reused.
 """
 
 from __future__ import annotations
 
 import math
 import re
-from typing import Iterable, Sequence
+from typing import Iterable, Mapping, Sequence
 
 import numpy as np
 
@@ -127,14 +128,39 @@ def keep_inside(objects: list[SceneObject], ids: Iterable[str], lo: Sequence[flo
 _NUMBERED = re.compile(r"^(.*)-(\d+)$")
 
 
-def next_id(wanted: str, label: str, taken: Iterable[str]) -> str:
-    """A new object's id: ``wanted`` (the mapper's ``{label}-{n}`` of its photo, a scene file's own id)
-    when no object has it, else the class's next free number ``{label}-{n}`` (``n`` one more than the
-    highest ``{label}-N`` taken); never a compound id like ``cardboard_box-3-3``."""
+def id_numbers(objects: Iterable[SceneObject], last: Mapping[str, int] | None = None) -> dict[str, int]:
+    """Highest id number per class: ``last`` (a map's :attr:`~pipeline.scene.Scene.last_ids`) raised by
+    the ``{label}-{n}`` ids of ``objects`` (an id of another form, a scene file's own, has no number)."""
+    out = dict(last or {})
+    for o in objects:
+        m = _NUMBERED.match(o.id)
+        if m is not None and m.group(1) == o.label:
+            out[o.label] = max(out.get(o.label, 0), int(m.group(2)))
+    return out
+
+
+def next_id(wanted: str, label: str, taken: Iterable[str], last: Mapping[str, int] | None = None) -> str:
+    """A new object's id, never one another object has had.
+
+    Args:
+        wanted: The mapper's ``{label}-{n}`` of its photo, or a scene file's own id.
+        label: Its class.
+        taken: The ids in the map now.
+        last: Highest number each class's ids have had in the map's life (:func:`id_numbers` of the
+            map before this capture): a ``{label}-{n}`` with ``n`` at most that was an object merged or
+            removed since.
+
+    Returns:
+        ``wanted`` when no object has or had it, else the class's next number ``{label}-{n}`` (one more
+        than the highest the class has had); never a compound id like ``cardboard_box-3-3``.
+    """
     ids = set(taken)
-    if wanted not in ids:
+    high = (last or {}).get(label, 0)
+    m = _NUMBERED.match(wanted)
+    had = m is not None and m.group(1) == label and int(m.group(2)) <= high
+    if wanted not in ids and not had:
         return wanted
-    top = 0
+    top = high
     for t in ids:
         m = _NUMBERED.match(t)
         if m is not None and m.group(1) == label:
@@ -142,5 +168,5 @@ def next_id(wanted: str, label: str, taken: Iterable[str]) -> str:
     return f"{label}-{top + 1}"
 
 
-__all__ = ["RAY_SIGMAS", "along_ray_match", "half_extent", "keep_inside", "next_id", "outside_workspace",
+__all__ = ["RAY_SIGMAS", "along_ray_match", "half_extent", "id_numbers", "keep_inside", "next_id", "outside_workspace",
            "ray_interval"]

@@ -17,8 +17,9 @@ runs the steps; the association is :mod:`pipeline.mapping.map_association`, an o
    the object's history, its centre (a guess from the class size) not used. One
    global assignment (``scipy.optimize.linear_sum_assignment`` on the Mahalanobis costs): an
    observation updates at most one object, an object takes at most one observation per capture.
-   An unmatched observation becomes a new object with the next free id of its class
-   (:func:`~pipeline.mapping.map_extent.next_id`; existing ids never change), unless it overlaps (in
+   An unmatched observation becomes a new object with the next id of its class, above every number the
+   class has had in the map's life (:func:`~pipeline.mapping.map_extent.next_id`, the map's ``last_ids``:
+   an id freed by a merge or a removal is never given again; existing ids never change), unless it overlaps (in
    footprint and height, as above) an object of its class another observation of the capture updated
    (one object seen as two detections) or its centre is outside the workspace ``bounds``: then it is
    rejected with the reason.
@@ -51,7 +52,7 @@ from typing import Any, Sequence
 from pipeline.mapping import map_consistency
 from pipeline.mapping.map_association import assign, candidates, class_key, pair_cost
 from pipeline.mapping.map_estimate import history_of, map_cov, refit, sighting
-from pipeline.mapping.map_extent import keep_inside, next_id, outside_workspace
+from pipeline.mapping.map_extent import id_numbers, keep_inside, next_id, outside_workspace
 from pipeline.mapping.map_merge import check_bounds, merge_overlapping, taken_overlap
 from pipeline.mapping.map_misses import drop_unconfirmed, record_misses
 from pipeline.mapping.map_report import EXTENT_NOTE, Action, FusionConfig, FusionReport, Outcome
@@ -130,6 +131,7 @@ def fuse(scene: Scene, observations: Scene, *, catalog: Any = None, config: Fusi
                          for i, o in enumerate(obs))
             return scene, FusionReport(outs, (), held)
 
+    last = id_numbers(scene.objects, scene.last_ids)  # numbers the map's life has given out
     outcomes: list[Outcome] = []
     touched: set[str] = set()
     index = {o.id: n for n, o in enumerate(objects)}
@@ -152,7 +154,7 @@ def fuse(scene: Scene, observations: Scene, *, catalog: Any = None, config: Fusi
             if reason is not None:
                 outcomes.append(Outcome(o.id, o.label, "rejected", None, reason, sig[i].along))
                 continue
-            new_id = next_id(o.id, o.label, index)
+            new_id = next_id(o.id, o.label, index, last)
             objects.append(replace(o, id=new_id, history=(sighting(o, c, others=obs),), pinned=False, flags=()))
             index[new_id] = len(objects) - 1
             touched.add(new_id)
@@ -177,6 +179,7 @@ def fuse(scene: Scene, observations: Scene, *, catalog: Any = None, config: Fusi
         touched.add(m.id)
         outcomes.append(Outcome(o.id, o.label, "updated", m.id, "", sig[i].along))
 
+    last_ids = id_numbers(objects, last)
     merged = merge_overlapping(objects, touched, keys, cfg.min_overlap, cfg.min_vertical,
                                lambda a, b: refit(a, history_of(a, captures) + history_of(b, captures), a),
                                {o.id for o in scene.objects})
@@ -186,7 +189,7 @@ def fuse(scene: Scene, observations: Scene, *, catalog: Any = None, config: Fusi
     corrections += _support(objects, touched)
     known = {c.id for c in scene.captures}
     new_caps = scene.captures + tuple(c for c in observations.captures if c.id not in known)
-    return Scene(objects=tuple(objects), captures=new_caps), FusionReport(tuple(outcomes), tuple(corrections),
+    return Scene(objects=tuple(objects), captures=new_caps, last_ids=last_ids), FusionReport(tuple(outcomes), tuple(corrections),
                                                                           merged=tuple(merged), removed=tuple(removed))
 
 
