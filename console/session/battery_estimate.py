@@ -8,6 +8,14 @@ reaches the critical level at that rate: the time the operator has to land or Re
 lands the robot by itself. A multirotor draws about the same power hovering as flying slowly, so the
 flight's own samples measure the hover drain.
 
+When the drain changes in the air (a climb, a gust, a heavier payload, a simulator run faster), a line
+through 120 s of reports would average the old drain with the new one for up to two minutes: at a drain
+tripled 20 s ago it still gave about three times the time there is. So when a report lies more than
+:data:`CHANGE` off the fitted line (more than one whole-percent step of a MAVLink battery report, which a
+steady drain never does), the reports are split where two lines fit them best (least squares over every
+split) and those before the change are dropped (the last :data:`MIN_SPAN` seconds are always kept): the
+estimate follows the new drain within seconds.
+
 An estimate needs :data:`MIN_SPAN` seconds of samples in the air and a falling charge; until then (and
 with an unknown charge) there is none, and the panel says the drain is being measured. Times are the
 link's report stamps [s]; charges are fractions in [0, 1].
@@ -33,6 +41,9 @@ MAX_SAMPLES = 1000
 """At most this many reports are kept."""
 MIN_RATE = 1e-5
 """A drain below this [1/s] (full to empty in more than a day) is no drain: no time is given."""
+CHANGE = 0.015
+"""A report this far [charge fraction] from the fitted line means the drain changed: the older reports go.
+More than a whole-percent step (MAVLink's ``battery_remaining``), so a steady drain keeps its window."""
 
 
 class DrainRate:
@@ -68,13 +79,46 @@ class DrainRate:
                 self._samples.popleft()
 
     def rate(self) -> float | None:
-        """The drain [charge fraction per s, > 0], or ``None`` when not measured yet (too short, not falling)."""
+        """The drain [charge fraction per s, > 0], or ``None`` when not measured yet (too short, not falling).
+
+        The slope of a least-squares line (``numpy.polyfit``) through the reports kept; reports before a
+        change of drain are dropped first (see the module's text)."""
         with self._lock:
             if len(self._samples) < 3 or self._samples[-1][0] - self._samples[0][0] < self.min_span:
                 return None
             t, c = np.array(self._samples).T
-        slope = float(np.polyfit(t - t[0], c, 1)[0])
+            t = t - t[0]
+            slope, icpt = np.polyfit(t, c, 1)
+            if float(np.max(np.abs(c - (slope * t + icpt)))) > CHANGE:  # the drain changed: keep the reports since
+                k = min(_change_point(t, c), int(np.searchsorted(t, t[-1] - self.min_span, side="right")) - 1)
+                if k > 0:
+                    for _ in range(k):
+                        self._samples.popleft()
+                    t, c = t[k:] - t[k], c[k:]
+                    slope = np.polyfit(t, c, 1)[0]
+        slope = float(slope)
         return -slope if -slope >= MIN_RATE else None
+
+
+def _change_point(t: np.ndarray, c: np.ndarray) -> int:
+    """The index where a second line starts that fits ``(t, c)`` best as two lines (least squares; at least 3
+    reports each); 0 when there are too few reports. Prefix sums give every split's squared error at once."""
+    n = len(t)
+    if n < 6:
+        return 0
+
+    def sse(cnt: np.ndarray, st: np.ndarray, sc: np.ndarray, stt: np.ndarray, stc: np.ndarray,
+            scc: np.ndarray) -> np.ndarray:
+        sxx = stt - st * st / cnt
+        sxy = stc - st * sc / cnt
+        syy = scc - sc * sc / cnt
+        return syy - np.where(sxx > 0, sxy * sxy / np.where(sxx > 0, sxx, 1.0), 0.0)
+
+    sums = [np.concatenate(([0.0], np.cumsum(v))) for v in (np.ones(n), t, c, t * t, t * c, c * c)]
+    k = np.arange(3, n - 2)  # the right line starts at report k
+    left = sse(*(s[k] for s in sums))
+    right = sse(*(s[n] - s[k] for s in sums))
+    return int(k[int(np.argmin(left + right))])
 
 
 def time_left(charge: float | None, rate: float | None, critical: float = BATTERY_CRITICAL) -> float | None:
@@ -104,4 +148,4 @@ def hover_text(charge: float | None, rate: float | None, critical: float = BATTE
             f"{100 * critical:.0f} %)")
 
 
-__all__ = ["DrainRate", "MIN_RATE", "MIN_SPAN", "WINDOW", "hover_text", "minutes_text", "time_left"]
+__all__ = ["CHANGE", "DrainRate", "MIN_RATE", "MIN_SPAN", "WINDOW", "hover_text", "minutes_text", "time_left"]

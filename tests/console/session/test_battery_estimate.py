@@ -8,6 +8,7 @@ from pathlib import Path
 import pytest
 
 from console.link.base import Mode, RobotState
+from console.link.sim_config import SimConfig
 from console.session.battery_estimate import MIN_SPAN, DrainRate, hover_text, minutes_text, time_left
 from console.session.operator_state import BATTERY_CRITICAL
 from console.session.session import Session
@@ -82,3 +83,66 @@ def test_the_session_says_the_time_left_while_the_robot_hovers_after_a_mission(t
     assert s.operator_state().battery_note == note
     report(40.0, (2.0, 2.5, 0.0), Mode.IDLE, 0.70, True)  # landed
     assert s.operator_state().battery_note == ""
+
+
+# --- the estimate against a known drain --------------------------------------------------------------------
+def _feed(d: DrainRate, t0: float, seconds: float, charge: float, rate: float, step: float = 0.5,
+          whole_percent: bool = True) -> tuple[float, float]:
+    """Reports every ``step`` s for ``seconds`` at ``rate`` [1/s] from ``charge``; returns (time, charge) at the end."""
+    k, t, c = 0, t0, charge
+    while k * step <= seconds:
+        t, c = t0 + k * step, charge - rate * k * step
+        d.add(t, round(100 * c) / 100 if whole_percent else c, airborne=True)
+        k += 1
+    return t, c
+
+
+@pytest.mark.parametrize("rate", [SimConfig().drain_fly, 0.17 / 30.0, 5e-4 * 8], ids=["sim-default", "17pc-in-30s", "8x"])
+def test_a_steady_drain_gives_the_time_left_within_10_percent(rate: float) -> None:
+    d = DrainRate()
+    _, c = _feed(d, 1000.0, 50.0, 0.65, rate)  # whole-percent reports, as MAVLink's battery_remaining
+    assert d.rate() == pytest.approx(rate, rel=0.10)
+    assert time_left(c, d.rate()) == pytest.approx((c - BATTERY_CRITICAL) / rate, rel=0.10)
+
+
+def test_after_a_change_of_drain_the_estimate_follows_the_new_one_within_seconds() -> None:
+    """100 s of a slow hover drain, then the drain of 17 % in 30 s: 20 s later, 40 % left, the time left is the
+    new drain's (about 53 s), not the 120 s line's (it said about 3 min: the old and new drains averaged)."""
+    d = DrainRate()
+    t, c = _feed(d, 1000.0, 100.0, 0.65, 0.0012)  # 0.65 -> 0.53
+    fast = 0.17 / 30.0
+    t, c = _feed(d, t + 0.5, 23.0, c - 0.5 * fast, fast)  # -> about 0.40
+    assert c == pytest.approx(0.40, abs=0.01)
+    assert d.rate() == pytest.approx(fast, rel=0.10)
+    assert time_left(c, d.rate()) == pytest.approx((c - BATTERY_CRITICAL) / fast, rel=0.10)
+    t, c = _feed(d, t + 0.5, 60.0, c, 0.0012, whole_percent=False)  # and back to the slow drain
+    assert d.rate() == pytest.approx(0.0012, rel=0.10)
+
+
+def test_the_simulators_drain_in_the_air_is_measured_within_10_percent() -> None:
+    """The simulated robot hovering at 4x the wall clock with its default drain: the estimate from its own
+    reports (stamped with the wall clock) is drain_fly x time_scale per wall second."""
+    from console.app import wait_until
+    from console.link.sim import SimRobot
+    from planner.mission import MissionSegment, SegmentKind
+
+    cfg = SimConfig(time_scale=4.0)
+    robot = SimRobot(config=cfg)
+    d = DrainRate()
+    air: list[float] = []  # stamps of the reports in the air [s]
+
+    def report(st: RobotState) -> None:
+        d.add(st.time, st.battery, not st.landed)
+        if not st.landed:
+            air.append(st.time)
+
+    robot.subscribe(report)
+    robot.connect()
+    try:
+        robot.run_segment(MissionSegment(SegmentKind.TAKEOFF, ((2.5, 0.7, 0.0), (2.5, 0.7, 1.5))))
+        assert wait_until(lambda: d.rate() is not None and air[-1] - air[0] >= 12.0, 120, 0.1), "no estimate in the air"
+        st = robot.latest_state()
+        assert st is not None and not st.landed and st.battery > BATTERY_CRITICAL
+        assert d.rate() == pytest.approx(cfg.drain_fly * cfg.time_scale, rel=0.10)
+    finally:
+        robot.close()
