@@ -6,7 +6,8 @@ a line or wall of cardboard boxes across it (wall to wall, with gaps narrower an
 robot, or with an open end), furniture in front of and behind it, and objects beside or behind the
 robot's start (outside the first view). The robot stands at ``y = 0.7`` facing +y. Perception is
 the simulator's ground truth: the render's depth with 2 % per-pixel noise (known space updated with
-a 3 % depth sigma), the objects visible in at least 200 pixels mapped with 8 cm / 3 degree noise;
+a 3 % depth sigma), the objects visible in at least 200 pixels mapped with 8 cm / 3 degree noise (and
+those sigmas in their history: the new planner keeps its mapping margin, :mod:`planner.map_uncertainty`);
 the ``miss10`` run drops each visible object with probability 0.1. Two capture protocols: ``one``
 capture from the start, and ``look`` (look around: 6 headings, 60 degrees apart). Goals: three floor
 spots behind the line, free in the true room for the robot's radius.
@@ -15,7 +16,8 @@ Per planner, counted over every (room, run, protocol, goal):
 
 - ``routes``: plans found; ``hit body`` / ``hit radius``: routes whose robot (a 0.25 m body, the
   simulator's; or the 0.35 m planning radius) overlaps a true object anywhere along the route
-  (sampled every 5 cm; walking: a cylinder up to 0.45 m, flying: a sphere);
+  (sampled every 5 cm; walking: a cylinder up to 0.45 m, flying: a sphere round the origin and the
+  cylinder up to 0.45 m above it);
 - ``edge``: routes that bring the robot nearer the workspace's edge than its 0.35 m radius (walls
   ``x = 0 / 5``, ``y = 0 / 8``; flying, the top less the robot's height); ``wall``: routes whose 0.25 m
   body touches the room's shell (the paper room's walls are the workspace's ``x = 0`` and ``x = 5``);
@@ -58,13 +60,17 @@ from bench.rooms import RADIUS, WS, Room, paper, random_room  # noqa: E402  (the
 from pipeline.camera.geometry import Pose, camera_pose_in_world  # noqa: E402
 from pipeline.mapping.known_space import KnownSpace, KnownState  # noqa: E402
 from pipeline.mapping.known_space_update import DepthNoise, capture_update  # noqa: E402
-from pipeline.scene import SceneObject  # noqa: E402
+from pipeline.scene import SceneObject, Sighting, Source  # noqa: E402
 from planner.cspace import box_distance  # noqa: E402
 from planner.grid import CellState, PlanningGrid, Workspace, box_cells, build_grid  # noqa: E402
 from planner.route import Route  # noqa: E402
 
 BODY = 0.25
 HEIGHT = 0.45
+POS_SIGMA = 0.08
+"""Mapped object position noise, 1 sigma per horizontal axis [m]."""
+YAW_SIGMA = math.radians(3.0)
+"""Mapped object heading noise, 1 sigma [rad]."""
 
 
 def legacy_grid(objs: list[SceneObject], ws: Workspace, margin: float) -> PlanningGrid:
@@ -106,13 +112,17 @@ def capture(room: Room, renderer: SceneRenderer, rng: np.random.Generator, headi
 
 
 def mapped_objects(room: Room, ids: set[str], rng: np.random.Generator, miss: float) -> list[SceneObject]:
+    """The objects seen, each at one noisy draw (``POS_SIGMA`` per axis, ``YAW_SIGMA``) and with that one
+    sighting and its sigmas in its history (as the map fusion leaves it: the planner's mapping margin)."""
     out = []
     for o in room.scene.objects:
         if o.id not in ids or rng.random() < miss:
             continue
-        dx, dy = rng.normal(0.0, 0.08, 2)
-        out.append(SceneObject(o.id, o.label, (o.position[0] + dx, o.position[1] + dy, o.position[2]), o.size,
-                               o.yaw + float(rng.normal(0.0, math.radians(3))), "world"))
+        dx, dy = rng.normal(0.0, POS_SIGMA, 2)
+        pos, yaw = (o.position[0] + dx, o.position[1] + dy, o.position[2]), o.yaw + float(rng.normal(0.0, YAW_SIGMA))
+        seen = (Sighting("bench", pos, yaw, o.size, (POS_SIGMA, POS_SIGMA, YAW_SIGMA)),)
+        out.append(SceneObject(o.id, o.label, pos, o.size, yaw, "world", source=Source("bench", "ground_truth"),
+                               history=seen))
     return out
 
 
@@ -132,8 +142,11 @@ def hits(room: Room, pts: np.ndarray, ground: np.ndarray, r: float) -> bool:
         if ground.any() and lo < HEIGHT and hi > 0.0:
             if np.any(box_distance(o, pts[ground], horizontal=True) < r - 1e-9):
                 return True
-        if (~ground).any() and np.any(box_distance(o, pts[~ground]) < r - 1e-9):
-            return True
+        if (~ground).any():  # flying: a sphere round the origin and the body's height above it
+            air = pts[~ground]
+            above = (box_distance(o, air, horizontal=True) < r - 1e-9) & (air[:, 2] + HEIGHT > lo) & (air[:, 2] < hi)
+            if np.any(above) or np.any(box_distance(o, air) < r - 1e-9):
+                return True
     return False
 
 

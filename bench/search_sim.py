@@ -13,7 +13,8 @@ capture) with a pluggable viewpoint picker, on a simulated robot much faster tha
   the known space with a 3 % depth sigma, then the robot's body and the floor round it free (as
   :meth:`console.session.session.Session.observe_capture` does); objects covering at least 200
   pixels of the full-size image (scaled with the image) and at least :data:`MIN_RANGE` away are
-  mapped with 8 cm / 3 degree noise (averaged over captures, by their true id); with ``miss`` each
+  mapped with 8 cm / 3 degree noise (averaged over captures, by their true id; the captures' sigmas
+  kept as the object's sightings, so the planner keeps its mapping margin); with ``miss`` each
   is dropped with that probability per capture (as ``bench/known_space.py`` and ``bench/sim_tour.py``);
 - **move**: the planner's A* route on the map built from the captures so far
   (:func:`planner.grid.build_grid` with the known space, the robot's size), followed in 5 cm steps;
@@ -45,7 +46,7 @@ from console.session.search_types import CONFIRM_CAPTURES
 from pipeline.camera.geometry import Intrinsics, Pose, camera_pose_in_world
 from pipeline.mapping.known_space import KnownSpace
 from pipeline.mapping.known_space_update import DepthNoise, capture_update
-from pipeline.scene import Scene, SceneObject
+from pipeline.scene import Scene, SceneObject, Sighting, Source
 from planner.grid import CostWeights, PlanningGrid
 from planner.mission import heading_to
 from planner.object_goal import ObjectGoalError, goal_beside
@@ -157,8 +158,10 @@ class SimSearch:
         """The mapped objects (world frame): each true object seen, at its mean noisy position."""
         out = []
         for o, xy, dyaw, n in self._seen.values():
-            out.append(SceneObject(o.id, o.label, (xy[0] / n, xy[1] / n, o.position[2]), o.size, o.yaw + dyaw / n,
-                                   "world"))
+            pos, yaw = (xy[0] / n, xy[1] / n, o.position[2]), o.yaw + dyaw / n  # its n sightings' sigmas kept in history
+            seen = (Sighting(None, pos, yaw, o.size, (POS_SIGMA, POS_SIGMA, YAW_SIGMA)),) * int(n)
+            out.append(SceneObject(o.id, o.label, pos, o.size, yaw, "world", source=Source(None, "ground_truth"),
+                                   history=seen))
         return out
 
     def grid(self, policy: str = "closed") -> PlanningGrid:

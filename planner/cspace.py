@@ -4,7 +4,9 @@ cube-distance dilation of obstacle cells, floating objects, the workspace's edge
 World frame (z up) [m]. A cell obstacle is the cell's cube; the distance from a cell centre to
 another cell's cube is ``resolution * sqrt(sum(max(|d| - 1/2, 0)^2))`` for the index offset ``d``,
 so :func:`dilate` closes exactly the cells whose centre lies within ``radius`` of an obstacle cell
-(its surface). Object boxes use their exact oriented box (:func:`box_distance`).
+(its surface). Object boxes use their exact oriented box (:func:`box_distance`), grown in plan by
+their mapping margin (:func:`planner.map_uncertainty.object_margin`: 0 for pinned objects and objects
+without sightings).
 
 Space outside the workspace is closed (nothing there was ever mapped): its faces are obstacles like
 any other, and the robot keeps its radius from them (:func:`edge_closed`, :func:`edge_gaps`): in plan
@@ -23,50 +25,66 @@ import numpy as np
 from scipy import ndimage
 
 from pipeline.scene import SceneObject
+from planner.map_uncertainty import margins
 
 FLOAT_TOL = 0.10
 """An object whose bottom is more than this [m] above the floor, with no object under it within this
 of its bottom, is *floating* (a mapping error or a shelf): the column beneath it is closed unless seen free."""
 
 
-def box_distance(obj: SceneObject, pts: np.ndarray, horizontal: bool = False) -> np.ndarray:
+def box_distance(obj: SceneObject, pts: np.ndarray, horizontal: bool = False, pad: float = 0.0) -> np.ndarray:
     """Distance [m] from world points ``(N, 3)`` to ``obj``'s oriented box (0 inside); with
-    ``horizontal`` only x, y count (distance to the box's footprint)."""
+    ``horizontal`` only x, y count (distance to the box's footprint). ``pad`` [m] grows the footprint
+    in plan (the box's Minkowski sum with a horizontal disc: its mapping margin,
+    :func:`planner.map_uncertainty.object_margin`); its height is unchanged."""
     p = np.asarray(pts, dtype=np.float64).reshape(-1, 3)
     w, h, l = obj.size
     c, s = math.cos(obj.yaw), math.sin(obj.yaw)
     d = p - np.asarray(obj.position)
     along = np.maximum(np.abs(c * d[:, 0] + s * d[:, 1]) - l / 2, 0.0)
     across = np.maximum(np.abs(-s * d[:, 0] + c * d[:, 1]) - w / 2, 0.0)
+    plan = np.hypot(along, across)
+    if pad > 0:
+        plan = np.maximum(plan - pad, 0.0)
     if horizontal:
-        return np.hypot(along, across)
+        return plan
     up = np.maximum(np.abs(d[:, 2]) - h / 2, 0.0)
-    return np.sqrt(along * along + across * across + up * up)
+    return np.hypot(plan, up)
 
 
 def _window(axis: np.ndarray, lo: float, hi: float) -> np.ndarray:
     return np.nonzero((axis >= lo) & (axis <= hi))[0]
 
 
+def _pads(objects: Sequence[SceneObject], pads: Sequence[float] | None) -> list[float]:
+    if pads is None:
+        return margins(objects)
+    if len(pads) != len(objects):
+        raise ValueError(f"pads: expected one per object ({len(objects)}), got {len(pads)}")
+    return [float(v) for v in pads]
+
+
 def object_distances(objects: Sequence[SceneObject], axes: tuple[np.ndarray, np.ndarray, np.ndarray], reach: float,
-                     z_band: tuple[float, float] | None = None) -> tuple[np.ndarray, np.ndarray]:
+                     z_band: tuple[float, float] | None = None, pads: Sequence[float] | None = None
+                     ) -> tuple[np.ndarray, np.ndarray]:
     """Distance [m] from every cell centre to the nearest object and that object's index (-1: none
     within ``reach`` [m]; distances beyond ``reach`` are ``inf``).
 
     With ``z_band = (z0, z1)`` the result is 2D ``[nx, ny]``: horizontal distance from the column's
     centre to the footprints of the objects whose height range overlaps ``z0..z1`` (a walking robot's
-    cylinder); else 3D ``[nx, ny, nz]`` Euclidean distances.
+    cylinder); else 3D ``[nx, ny, nz]`` Euclidean distances. Each object's footprint is grown by its
+    ``pads`` entry [m] (default: its mapping margin, :func:`planner.map_uncertainty.object_margin`).
     """
     xs, ys, zs = axes
     shape = (len(xs), len(ys)) if z_band is not None else (len(xs), len(ys), len(zs))
     dist = np.full(shape, np.inf)
     near = np.full(shape, -1, dtype=np.int32)
-    for n, obj in enumerate(objects):
+    for n, (obj, pad) in enumerate(zip(objects, _pads(objects, pads))):
         w, h, l = obj.size
         cx, cy, cz = obj.position
         if z_band is not None and not (cz - h / 2 < z_band[1] and cz + h / 2 > z_band[0]):
             continue
-        rxy = math.hypot(w, l) / 2 + reach
+        rxy = math.hypot(w, l) / 2 + reach + pad
         ix = _window(xs, cx - rxy, cx + rxy)
         iy = _window(ys, cy - rxy, cy + rxy)
         if ix.size == 0 or iy.size == 0:
@@ -74,14 +92,14 @@ def object_distances(objects: Sequence[SceneObject], axes: tuple[np.ndarray, np.
         if z_band is not None:
             gx, gy = np.meshgrid(xs[ix], ys[iy], indexing="ij")
             pts = np.stack([gx.ravel(), gy.ravel(), np.zeros(gx.size)], axis=1)
-            d = box_distance(obj, pts, horizontal=True).reshape(gx.shape)
+            d = box_distance(obj, pts, horizontal=True, pad=pad).reshape(gx.shape)
             sub = np.ix_(ix, iy)
         else:
             iz = _window(zs, cz - h / 2 - reach, cz + h / 2 + reach)
             if iz.size == 0:
                 continue
             gx, gy, gz = np.meshgrid(xs[ix], ys[iy], zs[iz], indexing="ij")
-            d = box_distance(obj, np.stack([gx.ravel(), gy.ravel(), gz.ravel()], axis=1)).reshape(gx.shape)
+            d = box_distance(obj, np.stack([gx.ravel(), gy.ravel(), gz.ravel()], axis=1), pad=pad).reshape(gx.shape)
             sub = np.ix_(ix, iy, iz)
         cur = dist[sub]
         better = d < cur

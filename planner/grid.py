@@ -6,7 +6,8 @@ Everything here is in the world frame (z up) [m]. Cell ``(i, j, k)`` spans
 ground layer (the robot walks there), ``k = 1`` the take-off/landing layer, ``k >= 2`` flight.
 
 :func:`build_grid` closes every cell the robot (:mod:`planner.robot_model`) cannot stand in:
-inside an object, within its radius of an obstacle (objects, unlabelled obstacles the depth saw,
+inside an object, within its radius of an obstacle (objects, grown by the uncertainty of where they
+were mapped; unlabelled obstacles the depth saw,
 unknown space unless allowed, the column under a floating object, the space outside the workspace),
 so no route passes closer than the radius; the danger band beyond it only makes cells dearer (Nav2's
 inflation layer). Known space comes from :mod:`pipeline.mapping.known_space` (read through
@@ -24,6 +25,9 @@ import numpy as np
 
 from pipeline.scene import Scene, SceneObject
 from planner.cspace import box_distance, dilate, edge_closed, floating_objects, object_distances
+from planner.clearance import crowding
+from planner.flight_body import body_gap, flight_dilate, flight_gaps
+from planner.map_uncertainty import margins
 from planner.robot_model import MORPHOGEAR, RobotModel, RobotModelError
 
 
@@ -255,10 +259,9 @@ class PlanningGrid:
         if i >= 0:
             return self.owners[i]
         if self.reason is not None and int(self.reason[cell[0], cell[1], cell[2]]) == Closed.CLEARANCE:
-            obj, dist = self.nearest_object(self.workspace.centers(np.array([cell]))[0])
-            r = self.robot.radius if cell[2] == 0 else self.robot.flying_radius
-            if obj is not None and dist <= r + 1e-9:
-                return obj.id
+            found = crowding(self, cell)
+            if found is not None:
+                return found[0].id
         return None
 
     def reason_at(self, cell: Sequence[int]) -> Closed:
@@ -296,8 +299,8 @@ class PlanningGrid:
     def own_cells(self, position: Sequence[float]) -> np.ndarray:
         """``bool [nx, ny, nz]``: the robot's own cells at ``position`` (world [m]): free by
         definition. On the floor (below the take-off layer) the ground cells whose centre lies
-        within ``robot.radius`` of it horizontally; in the air the cells within
-        ``robot.flying_radius`` of it; always the cell holding it."""
+        within ``robot.radius`` of it horizontally; in the air the cells whose centre lies in the flying
+        body (:mod:`planner.flight_body`: the sphere and the height above); always the cell holding it."""
         ws = self.workspace
         out = np.zeros(self.state.shape, dtype=bool)
         cell = ws.cell_of(position)
@@ -308,15 +311,15 @@ class PlanningGrid:
         if cell[2] == 0:
             out[:, :, 0] = np.hypot(xs[:, None] - p[0], ys[None, :] - p[1]) <= self.robot.radius + 1e-9
         else:
-            r = self.robot.flying_radius
-            out[:] = ((xs[:, None, None] - p[0]) ** 2 + (ys[None, :, None] - p[1]) ** 2
-                      + (zs[None, None, :] - p[2]) ** 2) <= r * r + 1e-9
+            r2, dz = self.robot.flying_radius ** 2 + 1e-9, zs[None, None, :] - p[2]
+            plan = (xs[:, None, None] - p[0]) ** 2 + (ys[None, :, None] - p[1]) ** 2
+            out[:] = (plan + dz ** 2 <= r2) | ((plan <= r2) & (dz >= 0) & (dz <= self.robot.height + 1e-9))
         out[cell] = True
         return out
 
     def objects_at(self, position: Sequence[float]) -> list[SceneObject]:
         """Objects overlapping the robot's body at ``position`` (world [m]; walking cylinder on the
-        floor layer, flying sphere above)."""
+        floor layer, the flying body above: :mod:`planner.flight_body`), as mapped (no mapping margin)."""
         ws = self.workspace
         cell = ws.cell_of(position)
         p = np.asarray([[float(v) for v in position]])
@@ -328,7 +331,7 @@ class PlanningGrid:
                     continue
                 if box_distance(o, p, horizontal=True)[0] < self.robot.radius:
                     out.append(o)
-            elif box_distance(o, p)[0] < self.robot.flying_radius:
+            elif body_gap(o, p[0], self.robot) <= 0.0:
                 out.append(o)
         return out
 
@@ -410,8 +413,10 @@ def build_grid(
     their boxes, which may be mapped off), unknown cells (when closed) and the columns beneath
     floating objects. The **ground layer** (``k = 0``, walking) is closed where an obstacle lies
     within ``robot.radius`` horizontally of the cell's centre anywhere up to ``robot.height`` (the
-    walking cylinder); **air layers** where an obstacle lies within ``robot.flying_radius`` in 3D.
-    Cell obstacles are their cubes, objects their exact boxes. Cells within the further
+    walking cylinder); **air layers** where an obstacle comes within the flying body at the cell's
+    centre (a sphere of ``robot.flying_radius`` and the cylinder of that radius up to ``robot.height``
+    above it: :mod:`planner.flight_body`). Cell obstacles are their cubes, objects their exact boxes grown in
+    plan by their mapping margin (:mod:`planner.map_uncertainty`: none when pinned or without sightings). Cells within the further
     ``danger_band`` are dangerous. Cells too near the workspace's edge for the robot are closed
     (:attr:`Closed.EDGE`, :func:`planner.cspace.edge_closed`).
     """
@@ -460,15 +465,14 @@ def build_grid(
     danger = np.zeros(ws.shape, dtype=bool)
     axes = ws.axes()
     reach_w = rb.radius + danger_band
-    reach_f = rb.flying_radius + danger_band
-    # air layers: spheres of the flying radius
-    d3, _ = object_distances(objs, axes, reach_f)
-    near3 = dilate(cell_obst, rb.flying_radius, res)
-    reason[(d3 <= rb.flying_radius + 1e-9) | near3] = Closed.CLEARANCE
-    danger |= (d3 <= reach_f + 1e-9) | dilate(cell_obst, reach_f, res)
+    # air layers: the flying body (a sphere of the flying radius and the body's height above the cell)
+    pads = margins(objs)
+    g3 = flight_gaps(objs, axes, rb, danger_band, pads)
+    reason[(g3 <= 1e-9) | flight_dilate(cell_obst, rb, res)] = Closed.CLEARANCE
+    danger |= (g3 <= danger_band + 1e-9) | flight_dilate(cell_obst, rb, res, danger_band)
     # ground layer: the walking cylinder
     kh = max(1, min(ws.shape[2], int(math.ceil(rb.height / res - 1e-9))))
-    d2, _ = object_distances(objs, axes, reach_w, z_band=(ws.floor, ws.floor + rb.height))
+    d2, _ = object_distances(objs, axes, reach_w, z_band=(ws.floor, ws.floor + rb.height), pads=pads)
     col = cell_obst[:, :, :kh].any(axis=2)
     ground = (d2 <= rb.radius + 1e-9) | dilate(col, rb.radius, res)
     reason[:, :, 0] = np.where(ground, Closed.CLEARANCE, Closed.OPEN)

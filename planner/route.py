@@ -26,6 +26,7 @@ from typing import Any, Sequence
 import numpy as np
 
 from planner.astar import AStarSearcher, min_finite_cost
+from planner.clearance import crowding
 from planner.cspace import box_distance, edge_blockers, edge_gaps
 from planner.grid import Closed, CostWeights, PlanningGrid
 from planner.mission import Mission, mission_from_cells
@@ -279,12 +280,19 @@ class Route:
             if obj is not None and dist <= 1e-9:
                 return (f"{here} is under {obj.label} '{obj.id}' (lower than the robot's {g.robot.height:.2f} m "
                         "height): choose a point further away"), None
-            if obj is not None and dist <= r + 1e-9:
+            crowd = crowding(g, c)
+            if crowd is not None:
+                obj, pad = crowd[0], crowd[2]
                 flat = c[2] == 0
+                dist = float(box_distance(obj, g.workspace.centers(np.array([c])), horizontal=flat)[0])
                 d_goal = float(box_distance(obj, np.array([[float(v) for v in p]]), horizontal=flat)[0])
                 near = "inside" if d_goal <= 1e-9 else f"{d_goal:.2f} m from"
+                extra = f" and {pad:.2f} m for where it may really be (2 sigma of its mapped place)" if pad > 0 else ""
+                body = ""
+                if not flat and dist > r + pad + 1e-9:  # only the body's height above the cell reaches it
+                    body = f"; the robot's {g.robot.height:.2f} m body above that cell reaches it"
                 return (f"{here} is {near} {obj.label} '{obj.id}' (its cell centre {_fmt(centre)}: {dist:.2f} m); "
-                        f"the robot needs {r:.2f} m around it (its radius): choose a point further away"), None
+                        f"the robot needs {r:.2f} m around it (its radius){extra}{body}: choose a point further away"), None
             if self._near_unknown(c):
                 vp = self.viewpoint_for(p)
                 look = (f"look from {_fmt(vp)} m (go there and capture towards it), or Look around" if vp is not None

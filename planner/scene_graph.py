@@ -63,6 +63,7 @@ from pipeline.scene import Scene, SceneObject
 
 from planner.graph_index import behind_mask, footprint_gaps, near_pairs, neighbours, overlapping_bearings
 from planner.grid import PlanningGrid
+from planner.map_uncertainty import position_sigma  # noqa: F401  (also read here by console.mcp)
 from planner.object_goal import Reachability, footprint
 from planner.route import Route
 from planner.view_geometry import RobotView, overlap_fraction
@@ -120,16 +121,6 @@ def direction(bearing: float) -> str:
     """Sector name of a bearing [rad] in the robot frame (0 ahead, positive to the left)."""
     deg = math.degrees(bearing) % 360.0
     return SECTORS[int(((deg + 22.5) % 360.0) // 45.0)]
-
-
-def position_sigma(o: SceneObject) -> float | None:
-    """Horizontal 1-sigma position error [m] of a mapped object: the inverse-variance fusion of
-    its used sightings' larger horizontal sigma (ray directions ignored); ``None`` without history."""
-    used = [h for h in getattr(o, "history", ()) if h.used]
-    if not used:
-        return None
-    info = sum(1.0 / max(h.sigma[0], h.sigma[1]) ** 2 for h in used)
-    return math.sqrt(1.0 / info)
 
 
 def _bottom(o: SceneObject) -> float:
