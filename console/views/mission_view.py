@@ -59,7 +59,8 @@ def segment_table(mission: Mission, current: int | None = None) -> str:
     """The mission as a Markdown table (HTML colour chips), the running segment in bold.
 
     A fly segment also says how high it climbs (``max 1.9 m`` above the floor): its two ends
-    alone can hide a climb over a tall obstacle.
+    alone can hide a climb over a tall obstacle. The *from → to* cell holds its start, its end and that
+    climb (or a turn's heading) one a line, so every column fits the control panel (370 px) unscrolled.
     """
     floor = float(mission.bounds_min[2])
     rows = ["| # | type | from → to [m] | length |", "|---|---|---|---|"]
@@ -68,10 +69,10 @@ def segment_table(mission: Mission, current: int | None = None) -> str:
         chip = (f"<span style='display:inline-block;width:0.7em;height:0.7em;border-radius:2px;"
                 f"background:rgb{KIND_RGB[s.kind]};margin-right:0.3em'></span>")
         kind = kind_text(s.kind)
-        peak = f", **max {max_height(s, floor):.1f} m**" if s.kind is SegmentKind.FLY else ""
+        peak = f"<br>**max {max_height(s, floor):.1f} m**" if s.kind is SegmentKind.FLY else ""
         if s.kind is SegmentKind.TURN and s.yaw is not None:
-            peak = f", to heading **{math.degrees(s.yaw):.0f}°**"
-        row = (f"| {i + 1} | {chip}{kind} | ({a[0]:.1f}, {a[1]:.1f}, {a[2]:.1f}) → "
+            peak = f"<br>to heading **{math.degrees(s.yaw):.0f}°**"
+        row = (f"| {i + 1} | {chip}{kind} | ({a[0]:.1f}, {a[1]:.1f}, {a[2]:.1f}) →<br>"
                f"({b[0]:.1f}, {b[1]:.1f}, {b[2]:.1f}){peak} | {s.length:.2f} m |")
         if current == i:
             row = row.replace(f"| {i + 1} |", f"| ▶ **{i + 1}** |", 1)

@@ -4,7 +4,8 @@
   (Hold, Land here, Return) and the mission (Build mission, the segment table, Execute, Pause,
   Resume, Abort) sticks to the top of the control panel (CSS ``position: sticky``) while the rest
   (Map, Plan, Find, Scene summary, Session) scrolls beneath it. The folder is found by a marker
-  (:data:`PIN_MARK`) placed in it; a long mission table scrolls inside the block.
+  (:data:`PIN_MARK`) placed in it; a long mission table scrolls inside the block, its rows tight (a segment's
+  start and end on two lines, so that every column fits the panel's width).
 - **Tables** in the panel never wrap a cell ("take- / off"): a wide table scrolls sideways.
 - **Phone** (a window at most :data:`PHONE_MAX_PX` wide): viser shows the controls as a sheet at the
   bottom (the camera panel is its last section); the sheet takes the full width and at most
@@ -62,7 +63,8 @@ def layout_style() -> str:
   box-shadow: 0 -0.9em 0 0 var(--mantine-color-body), 0 0.6em 0.6em -0.5em rgba(0, 0, 0, 0.25);
 }}
 .mantine-ScrollArea-viewport div[style*="overflow: hidden"]:has([data-mn-pin]) {{ overflow: clip !important; min-width: 0; }}
-{_PIN} table {{ display: block; max-height: 10.5em; overflow: auto; }}
+{_PIN} table {{ display: block; max-height: 15em; overflow: auto; }}
+{_PIN} td, {_PIN} th {{ line-height: 1.3; padding-top: 0.15em !important; padding-bottom: 0.15em !important; }}
 .mantine-ScrollArea-viewport table {{ display: block; max-width: 100%; overflow-x: auto; }}
 .mantine-ScrollArea-viewport td, .mantine-ScrollArea-viewport th {{ white-space: nowrap; }}
 @media (max-width: {PHONE_MAX_PX}px) {{
