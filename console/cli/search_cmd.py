@@ -3,13 +3,17 @@
 Prints each step of the search (:class:`console.session.search.SearchJob`) and writes the result as
 JSON (``--out``): found, target id, final position, distance to the target, path length, captures,
 time and the reason it ended. Perception is the simulator's ground truth (its rendered depth for the
-known space). The options and their checks are in :mod:`console.cli.search_args`. Registered by
+known space). Each step is printed once: the operator notices the steps already say (a capture's
+*Mapped*, the search's own *Find: ...*) are not printed again; any other warning or error notice is
+printed once on stderr (``notice: <title>: <text>``). The options and their checks are in :mod:`console.cli.search_args`. Registered by
 :mod:`console.cli.morphonavi`.
 """
 
 from __future__ import annotations
 
 import argparse
+import logging
+import sys
 import tempfile
 from pathlib import Path
 from typing import Any
@@ -64,10 +68,28 @@ class HeadlessRig:
         self.robot.close()
 
 
+STEP_NOTICES = ("Mapped", "Find")
+"""Titles of the operator notices the printed steps already say (``Find: robot dog`` starts with ``Find``)."""
+
+
+def said_by_steps(title: str) -> bool:
+    """Whether a notice titled ``title`` repeats a printed step (a capture's result, the search's own report)."""
+    return any(title == t or title.startswith(t + ":") for t in STEP_NOTICES)
+
+
+class _NoticesOnce(logging.Filter):
+    """Keeps the session's notices out of the log (Python prints unhandled warnings on stderr): the command
+    prints each one once itself; the session's errors (a failed listener) still reach stderr."""
+
+    def filter(self, record: logging.LogRecord) -> bool:
+        return record.levelno >= logging.ERROR
+
+
 def cmd_search(args: argparse.Namespace) -> int:
     from console.cli.outputs import write_output
     from console.cli.search_args import search_request
-    from console.session.session import JOB
+    from console.session.session import JOB, NOTICE
+    from console.wording import plural
 
     req = search_request(args)  # every option checked before the simulator starts
     world, cfg, out = req.world, req.config, req.out
@@ -76,7 +98,9 @@ def cmd_search(args: argparse.Namespace) -> int:
                           seed=req.seed)
         printed = [0]
 
-        def show(topic: str, _payload: Any) -> None:
+        def show(topic: str, payload: Any) -> None:
+            if topic == NOTICE and payload.level in ("warning", "error") and not said_by_steps(payload.title):
+                print(f"notice: {payload.title}: {payload.body}", file=sys.stderr, flush=True)
             if topic != JOB:
                 return
             steps = rig.search.steps
@@ -85,6 +109,8 @@ def cmd_search(args: argparse.Namespace) -> int:
                 printed[0] += 1
 
         rig.session.subscribe(show)
+        session_log, quiet = logging.getLogger("console.session.session"), _NoticesOnce()
+        session_log.addFilter(quiet)
         try:
             seed = f", noise seed {req.seed}" if req.seed is not None else ""
             print(f"searching the simulator's room '{world.name}' for {cfg.target!r} "
@@ -100,12 +126,15 @@ def cmd_search(args: argparse.Namespace) -> int:
             result = rig.search.result
         finally:
             rig.close()
+            session_log.removeFilter(quiet)
     assert result is not None
     for line in result.steps[printed[0]:]:
         print(line)
     d = f"{result.distance_to_target:.2f} m from it" if result.distance_to_target is not None else "not located"
     print(f"{'FOUND' if result.found else 'NOT FOUND'}: {result.reason}; target {result.target_id or '-'} ({d}); "
-          f"{result.captures} captures, {result.path_length:.1f} m travelled, {result.time:.0f} s")
+          f"{plural(result.captures, 'capture')}, {result.path_length:.1f} m travelled, {result.time:.0f} s")
+    if result.left_unseen:
+        print(f"left unseen: {result.left_unseen}")
     if out is not None:
         write_output(out, result.to_json() + "\n")
         print(f"result written to {out}")
@@ -124,4 +153,4 @@ def add_search_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[
     p.set_defaults(func=cmd_search, command="search")
 
 
-__all__ = ["HeadlessRig", "add_search_parser", "cmd_search", "target_height"]
+__all__ = ["HeadlessRig", "STEP_NOTICES", "add_search_parser", "cmd_search", "said_by_steps", "target_height"]

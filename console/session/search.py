@@ -55,6 +55,7 @@ from console.session.search_types import (
     target_height, target_matches,
 )
 from console.session.session import RUN, JobStatus, Session, SessionError
+from console.wording import plural
 
 log = logging.getLogger(__name__)
 
@@ -267,7 +268,7 @@ class SearchJob(SearchFinish, SearchMoves, JobThread):
         r = self.result
         assert r is not None
         if r.captures >= cfg.max_captures:
-            return f"not found: budget of {cfg.max_captures} captures used"
+            return f"not found: budget of {plural(cfg.max_captures, 'capture')} used"
         if time.monotonic() - t0 > cfg.max_time:
             return f"not found: time budget of {cfg.max_time:.0f} s used"
         return self._battery_end()
@@ -305,9 +306,9 @@ class SearchJob(SearchFinish, SearchMoves, JobThread):
         text = (f"found {r.target_id} at {r.distance_to_target:.2f} m" if r.found and r.distance_to_target is not None
                 else r.reason)
         self._land_nearest(False)
-        self._set_job(JobStatus(self._name(), False, 1.0, f"{text}: {r.captures} captures, {r.path_length:.1f} m, "
+        self._set_job(JobStatus(self._name(), False, 1.0, f"{text}: {plural(r.captures, 'capture')}, {r.path_length:.1f} m, "
                                                             f"{r.time:.0f} s"))
-        s.notify(self._name(), f"{text} ({r.captures} captures, {r.path_length:.1f} m travelled)"
+        s.notify(self._name(), f"{text} ({plural(r.captures, 'capture')}, {r.path_length:.1f} m travelled)"
                  + (f"; left unseen: {r.left_unseen}" if r.left_unseen else ""), "success" if r.found else "warning")
         self._announce(result_event(self.search_id, r))
 
@@ -342,7 +343,7 @@ class SearchJob(SearchFinish, SearchMoves, JobThread):
     def _loop(self, cfg: SearchConfig, t0: float) -> str:
         r = self.result
         assert r is not None
-        self._step("start", f"searching for {cfg.target} ({cfg.mode} mode; budget {cfg.max_captures} captures, "
+        self._step("start", f"searching for {cfg.target} ({cfg.mode} mode; budget {plural(cfg.max_captures, 'capture')}, "
                    f"{cfg.max_time:.0f} s, battery down to {100 * cfg.min_battery:.0f} %)", 0.02)
         if not self._capture("where the robot stands"):
             return "a capture failed"
@@ -358,7 +359,7 @@ class SearchJob(SearchFinish, SearchMoves, JobThread):
                                f"m, seen in {n} capture{'s' if n > 1 else ''}: going beside it", 0.9, target_id=obj.id)
                     return self._finish(obj)
                 if r.captures >= cfg.max_captures:
-                    return f"budget: {cfg.max_captures} captures used ({obj.id} seen once, not confirmed)"
+                    return f"budget: {plural(cfg.max_captures, 'capture')} used ({obj.id} seen once, not confirmed)"
                 here = self._pos()
                 if not any(math.dist(here[:2], p[:2]) < 0.5 for p in self._confirmed_from):
                     self._step("seen", f"{obj.label} {obj.id} seen once: facing it to confirm", 0.7, target_id=obj.id)
