@@ -4,12 +4,16 @@ A page there may draw one frame every few seconds, so Playwright's "wait until s
 the same box) alone can take ten seconds, and a panel re-drawn between two tries detaches the button
 found before. :func:`click_until` therefore finds the element afresh each try, bounds each try by the
 time left, and stops when the console's *state* says the click took, never after a fixed sleep.
+:func:`sim_console` starts the console on the simulated robot (with ``conftest.py``'s ``captured_console``
+fixture) and :func:`open_tab` opens a tab on it, ready.
 """
 
 from __future__ import annotations
 
 import time
-from typing import Any, Callable
+from contextlib import contextmanager
+from pathlib import Path
+from typing import Any, Callable, Iterator
 
 from console.app import wait_until
 
@@ -67,3 +71,51 @@ def copy_and_hear(page: Any, timeout: float = 300.0) -> list[str]:
 def button(page: Any, name: str) -> Callable[[], Any]:
     """A locator factory for the button named exactly ``name`` (the first one), for :func:`click_until`."""
     return lambda: page.get_by_role("button", name=name, exact=True).first
+
+
+LONG_MS = 90_000
+"""[ms] a generous wait for the page on a loaded 2-core machine."""
+
+
+@contextmanager
+def sim_console(folder: Path, *, time_scale: float = 12.0, capture: bool = True, **config: Any) -> Iterator[Any]:
+    """The console on the simulated robot in the paper's room: a fresh session in ``folder``, a free port,
+    ``time_scale`` times real time, ``config`` more :class:`console.app.ConsoleConfig` fields; yields the started
+    :class:`console.app.ConsoleApp` once the robot's state came and (``capture``) one Capture & map is mapped;
+    stops it after."""
+    from console.app import ConsoleApp, ConsoleConfig
+    from console.link.sim import SimConfig, SimRobot
+
+    cfg = ConsoleConfig(robot="sim", session_dir=folder / "session", scene_dir=folder / "scenes", port=0,
+                        fresh=True, **config)
+    app = ConsoleApp(cfg, link=SimRobot(config=SimConfig(time_scale=time_scale))).start()
+    try:
+        s = app.session
+        wait_for(lambda: s.robot is not None, "the robot's state", 60)
+        if capture:
+            assert app.mapping.start()
+            wait_for(lambda: s.capture is not None and not s.job.running, f"the first capture ({s.job})", 180)
+        yield app
+    finally:
+        app.stop()
+
+
+def open_tab(browser: Any, app: Any, width: int, height: int, *, ready: str = "Capture & map",
+             init_script: str | None = None, style: str | None = None) -> tuple[Any, Any]:
+    """A new tab of ``app``'s console at ``width`` x ``height`` CSS px: the page loaded (its button ``ready``
+    there), connected, and its camera state on the server. ``init_script`` runs in the page before its own
+    scripts; ``style`` (CSS) is added once loaded. Returns ``(page, client)``: the Playwright page and the
+    tab's viser client."""
+    before = set(app.server.get_clients())
+    page = browser.new_page(viewport={"width": width, "height": height})
+    page.set_default_timeout(LONG_MS)
+    if init_script:
+        page.add_init_script(init_script)
+    page.goto(app.url)
+    page.get_by_role("button", name=ready, exact=True).first.wait_for(state="attached", timeout=LONG_MS)
+    if style:
+        page.add_style_tag(content=style)
+    wait_for(lambda: set(app.server.get_clients()) - before, "the page to connect", 60)
+    client = app.server.get_clients()[max(set(app.server.get_clients()) - before)]
+    wait_for(lambda: client.camera.image_height > 0, "the tab's camera state", 60)
+    return page, client

@@ -30,16 +30,18 @@ from typing import Any, Callable
 import numpy as np
 import pytest
 
-from console.app import ConsoleApp, ConsoleConfig, wait_until
+from console.app import ConsoleApp, wait_until
 from console.views.client_notice import DETAILS_WHERE
 from console.views.notice_details import FOLDER
 from console.views.object_labels import choose, fixed_labels, label_rect, overlaps, project, px_per_css
 from console.views.screen_layout import PHONE_SHEET_VH
-from tests.console.e2e.test_console_e2e import BROWSER_ARGS, CHROMIUM, needs_browser
+from tests.console.e2e.e2e_helpers import open_tab
+from tests.console.e2e.test_console_e2e import needs_browser
 
 LONG = 90_000  # [ms] generous waits for the page on a loaded 2-core machine
 GOAL = (2.6, 2.2)  # seen free floor after the first capture, between the robot and the line of boxes
-MISSION_GOALS = ((3.0, 2.8, 1.2), (*GOAL, 0.0))  # up into the air, then down on floor the capture saw free
+MISSION_GOALS = ((2.6, 2.8, 1.2), (*GOAL, 0.0))  # up into the air, then down on floor the capture saw free
+# ((3.0, 2.8, 1.2) is now refused: within the mapping margin the planner grows office_chair-2 by)
 MAPPED = ("26 objects seen (2 new, 21 updated, 3 not used) in 4.1 s; not used: desk (0.4 m outside the workspace: "
           "not added); chair-2: seen in part along the viewing ray: its centre, a guess from the class size, not used; "
           "cardboard_box-7: buried 0.20 m below the floor (check the camera pose); office_chair-1: sigma grown: near "
@@ -56,45 +58,14 @@ new MutationObserver(() => {
 
 
 @pytest.fixture(scope="module")
-def console(tmp_path_factory: pytest.TempPathFactory):
-    from console.link.sim import SimConfig, SimRobot
-
-    tmp = tmp_path_factory.mktemp("legible")
-    app = ConsoleApp(ConsoleConfig(robot="sim", session_dir=tmp / "session", scene_dir=tmp / "scenes", port=0,
-                                   fresh=True, record=False), link=SimRobot(config=SimConfig(time_scale=12.0))).start()
-    try:
-        s = app.session
-        assert wait_until(lambda: s.robot is not None, 60), "no robot state"
-        assert app.mapping.start()
-        assert wait_until(lambda: s.capture is not None and not s.job.running, 180), s.job
-        yield app
-    finally:
-        app.stop()
-
-
-@pytest.fixture(scope="module")
-def browser():
-    from playwright.sync_api import sync_playwright
-
-    with sync_playwright() as pw:
-        b = pw.chromium.launch(executable_path=str(CHROMIUM), headless=True, args=BROWSER_ARGS)
-        try:
-            yield b
-        finally:
-            b.close()
+def console(captured_console: ConsoleApp) -> ConsoleApp:
+    """The console after one capture (``conftest.py``)."""
+    return captured_console
 
 
 def _open(browser: Any, app: ConsoleApp, width: int, height: int) -> tuple[Any, Any]:
     """A new tab at ``width`` x ``height`` recording the notices it shows, as soon as Add goal is on it."""
-    before = set(app.server.get_clients())
-    page = browser.new_page(viewport={"width": width, "height": height})
-    page.set_default_timeout(LONG)
-    page.add_init_script(SEEN_TITLES)
-    page.goto(app.url)
-    page.get_by_role("button", name="Add goal", exact=True).wait_for(state="attached", timeout=LONG)
-    assert wait_until(lambda: set(app.server.get_clients()) - before, 60), "the page did not connect"
-    client = app.server.get_clients()[max(set(app.server.get_clients()) - before)]
-    return page, client
+    return open_tab(browser, app, width, height, ready="Add goal", init_script=SEEN_TITLES)
 
 
 def _click(page: Any, locator: Callable[[], Any], done: Callable[[], bool], what: str, timeout: float = 240.0) -> None:

@@ -31,10 +31,11 @@ from typing import Any
 import numpy as np
 import pytest
 
-from console.app import ConsoleApp, ConsoleConfig, wait_until
+from console.app import ConsoleApp, wait_until
 from console.views.object_labels import overlaps
 from console.views.screen_layout import PHONE_SHEET_VH, WIDER_SCREEN_TEXT
-from tests.console.e2e.test_console_e2e import BROWSER_ARGS, CHROMIUM, _project, needs_browser
+from tests.console.e2e.e2e_helpers import open_tab
+from tests.console.e2e.test_console_e2e import _project, needs_browser
 
 LONG = 90_000  # [ms] generous waits for the page on a loaded machine
 HIDE_NOTICES = ".mantine-Notifications-root { display: none !important; }"
@@ -44,52 +45,22 @@ MISSION_GOALS = ((2.5, 5.5, 1.5), (2.0, 1.5, 0.0))  # over the line of boxes, th
 
 
 @pytest.fixture(scope="module")
-def console(tmp_path_factory: pytest.TempPathFactory):
-    from console.link.sim import SimConfig, SimRobot
-
-    tmp = tmp_path_factory.mktemp("screen")
-    app = ConsoleApp(ConsoleConfig(robot="sim", session_dir=tmp / "session", scene_dir=tmp / "scenes", port=0,
-                                   fresh=True), link=SimRobot(config=SimConfig(time_scale=12.0))).start()
-    try:
-        s = app.session
-        assert wait_until(lambda: s.robot is not None, 60), "no robot state"
-        assert app.mapping.start()
-        assert wait_until(lambda: s.capture is not None and not s.job.running, 180), s.job
-        s.set_plan_unknown(True)  # the first goal hovers behind the line, not seen from the start
-        for goal in MISSION_GOALS:
-            res = s.add_goal(goal)
-            assert res.ok, res.message
-            s.register()
-        mission = s.build_mission()
-        assert "takeoff" in mission.kinds()
-        yield app
-    finally:
-        app.stop()
-
-
-@pytest.fixture(scope="module")
-def browser():
-    from playwright.sync_api import sync_playwright
-
-    with sync_playwright() as pw:
-        b = pw.chromium.launch(executable_path=str(CHROMIUM), headless=True, args=BROWSER_ARGS)
-        try:
-            yield b
-        finally:
-            b.close()
+def console(captured_console: ConsoleApp) -> ConsoleApp:
+    """The console after one capture (``conftest.py``), with a five-segment mission built."""
+    s = captured_console.session
+    s.set_plan_unknown(True)  # the first goal hovers behind the line, not seen from the start
+    for goal in MISSION_GOALS:
+        res = s.add_goal(goal)
+        assert res.ok, res.message
+        s.register()
+    mission = s.build_mission()
+    assert "takeoff" in mission.kinds()
+    return captured_console
 
 
 def _open(browser: Any, app: ConsoleApp, width: int, height: int) -> tuple[Any, Any]:
     """A new tab at ``width`` x ``height``, connected, and its client on the server."""
-    before = set(app.server.get_clients())
-    page = browser.new_page(viewport={"width": width, "height": height})
-    page.goto(app.url)
-    page.get_by_role("button", name="Capture & map").wait_for(state="attached", timeout=LONG)
-    page.add_style_tag(content=HIDE_NOTICES)
-    assert wait_until(lambda: set(app.server.get_clients()) - before, 60), "the page did not connect"
-    client = app.server.get_clients()[max(set(app.server.get_clients()) - before)]
-    assert wait_until(lambda: client.camera.image_height > 0, 60), "no camera state from the page"
-    return page, client
+    return open_tab(browser, app, width, height, style=HIDE_NOTICES)
 
 
 def _box(page: Any, locator: Any) -> dict[str, float]:
