@@ -133,4 +133,27 @@ def assign(obs: Sequence[SceneObject], covs: Sequence[np.ndarray], objects: Sequ
     return out
 
 
-__all__ = ["assign", "candidates", "class_key", "pair_cost"]
+def assign_capture(obs: Sequence[SceneObject], sigs: Sequence[ObservationSigma], objects: Sequence[SceneObject],
+                   cfg: FusionConfig, captures: dict[str, Capture], keys: dict[str, str],
+                   by_extent: set[int]) -> dict[int, int]:
+    """:func:`assign` for the usable observations of a capture (``sigs``: their sigmas), tried a second
+    time with the wide gate when an observation whose side a nearer object of its class hides found no
+    object (:attr:`~pipeline.mapping.observation_sigma.ObservationSigma.side_extent`): seen along a line of
+    boxes, a view's box ends where its nearer neighbour begins, its centre is off across the ray by up
+    to its extent, and the narrow gate gives its object to the neighbour's view. The second try is kept
+    when it matches more observations (one box fewer mapped twice)."""
+    covs = [g.gate_covariance(o.position) for o, g in zip(obs, sigs)]
+    ray: set[int] = set()
+    out = assign(obs, covs, objects, cfg, captures, keys, set(), sigs, ray)
+    if any(i not in out and g.side_extent > 0 for i, g in enumerate(sigs)):
+        wide = [g.gate_covariance(o.position, wide=True) for o, g in zip(obs, sigs)]
+        ray2: set[int] = set()
+        again = assign(obs, wide, objects, cfg, captures, keys, set(), sigs, ray2)
+        gained = set(again) - set(out)
+        if set(out) <= set(again) and gained and all(sigs[i].side_extent > 0 for i in gained):
+            out, ray = again, ray2
+    by_extent |= ray
+    return out
+
+
+__all__ = ["assign", "assign_capture", "candidates", "class_key", "pair_cost"]

@@ -16,7 +16,10 @@ runs the steps; the association is :mod:`pipeline.mapping.map_association`, an o
    viewing ray meets (:func:`~pipeline.mapping.map_extent.along_ray_match`): such a view is recorded in
    the object's history, its centre (a guess from the class size) not used. One
    global assignment (``scipy.optimize.linear_sum_assignment`` on the Mahalanobis costs): an
-   observation updates at most one object, an object takes at most one observation per capture.
+   observation updates at most one object, an object takes at most one observation per capture; when a
+   view whose side a nearer object of its class hides (a line of boxes seen end-on) finds no object, the
+   assignment is tried again with its gate as wide as its extent across the ray
+   (:func:`~pipeline.mapping.map_association.assign_capture`).
    An unmatched observation becomes a new object with the next id of its class, above every number the
    class has had in the map's life (:func:`~pipeline.mapping.map_extent.next_id`, the map's ``last_ids``:
    an id freed by a merge or a removal is never given again; existing ids never change), unless it overlaps (in
@@ -36,7 +39,7 @@ runs the steps; the association is :mod:`pipeline.mapping.map_association`, an o
    observations, unless one capture detected both whole, apart; pinned objects are left alone. An
    object the capture should have seen (in view, nothing mapped in front) and did not gets a miss
    (:mod:`pipeline.mapping.map_misses`): one seen by a single capture is removed after two (one if seen
-   only in part). An update that carried a centre out of the workspace keeps it at the edge.
+   only in part), one seen only in part by ``n`` captures after ``n``. An update that carried a centre out of the workspace keeps it at the edge.
 6. **Support** (:mod:`pipeline.mapping.map_support`): a floor-standing class rests on the floor or on the
    object under it; a floating or buried estimate is corrected and flagged.
 7. **Consistency** (:mod:`pipeline.mapping.map_consistency`): a capture whose objects match nothing the map
@@ -50,7 +53,7 @@ from dataclasses import replace
 from typing import Any, Sequence
 
 from pipeline.mapping import map_consistency
-from pipeline.mapping.map_association import assign, candidates, class_key, pair_cost
+from pipeline.mapping.map_association import assign, assign_capture, candidates, class_key, pair_cost
 from pipeline.mapping.map_estimate import history_of, map_cov, refit, sighting
 from pipeline.mapping.map_extent import id_numbers, keep_inside, next_id, outside_workspace
 from pipeline.mapping.map_merge import check_bounds, merge_overlapping, taken_overlap
@@ -112,8 +115,7 @@ def fuse(scene: Scene, observations: Scene, *, catalog: Any = None, config: Fusi
     sig = {i: observation_sigma(o, cap(o), obs) for i, o in enumerate(obs)}
     covs = {i: sig[i].gate_covariance(o.position) for i, o in enumerate(obs)}
     ray: set[int] = set()
-    first = assign([obs[i] for i in good], [covs[i] for i in good], objects, cfg, captures, keys, set(),
-                    [sig[i] for i in good], ray)
+    first = assign_capture([obs[i] for i in good], [sig[i] for i in good], objects, cfg, captures, keys, ray)
     match = {good[a]: j for a, j in first.items()}
     by_extent = {good[a] for a in ray}
     second = assign([obs[i] for i in bad], [covs[i] for i in bad], objects, cfg, captures, keys, set(match.values()),

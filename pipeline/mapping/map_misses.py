@@ -10,7 +10,8 @@ object stands on the line of sight to it (:func:`line_of_sight_clear`) and none 
 detections matched it, the capture records a **miss** in the object's history (``used`` false, note
 :data:`MISS_NOTE`). An unpinned object seen by one capture only and missed by :data:`MISSES` later
 captures (one, when that capture saw it only in part) is removed, with the reason in the fusion's
-report. A real object seen once and then missed
+report; so is one seen only in part by ``n`` captures and missed by ``n`` (two false boxes that happened
+to agree, each read as an occluded object, go after two misses; an object seen whole by two captures stays). A real object seen once and then missed
 twice where nothing hides it would need two missed detections in a row (the noisy simulator misses
 10 % of them), and a view hidden by something unmapped still counts as a miss: hence two, not one.
 """
@@ -32,8 +33,8 @@ MISS_NOTE = "in view and not detected"
 """History note of a capture that should have seen the object and did not."""
 
 MISSES = 2
-"""Misses after which an object seen whole by one capture only is removed (one when that capture saw it
-only in part: cut by the border or occluded, its centre a guess)."""
+"""Misses after which an object seen whole by one capture only is removed (one per capture that saw it
+when every view of it was partial: cut by the border or occluded, its centre a guess)."""
 
 MAX_MISS_RANGE = 4.5
 """Farthest camera-to-centre distance [m] at which a capture's silence counts as a miss (the depth
@@ -108,7 +109,9 @@ def record_misses(objects: list[SceneObject], captures: Sequence[Capture], seen:
 
 
 def drop_unconfirmed(objects: list[SceneObject]) -> list[tuple[str, str]]:
-    """Remove (in place) each unpinned object seen by one capture only and missed by :data:`MISSES` others.
+    """Remove (in place) each unpinned object seen by one capture only and missed by :data:`MISSES` others
+    (one when it was seen in part), and each seen only in part by ``n`` captures and missed by ``n``: the
+    evidence against it outweighs the evidence for it.
 
     Returns:
         ``(id, reason)`` per removed object.
@@ -116,9 +119,11 @@ def drop_unconfirmed(objects: list[SceneObject]) -> list[tuple[str, str]]:
     out: list[tuple[str, str]] = []
     keep: list[SceneObject] = []
     for o in objects:
-        n = _misses(o)
-        if not o.is_pinned and len(_seen_by(o)) == 1 and n >= (1 if _partial_only(o) else MISSES):
-            out.append((o.id, f"seen by one capture only, then in view and not detected by {n} others: removed"))
+        n, seen = _misses(o), len(_seen_by(o))
+        partial = _partial_only(o)
+        if not o.is_pinned and (seen == 1 or (seen > 1 and partial)) and n >= (1 if partial else MISSES) * seen:
+            by = "one capture only" if seen == 1 else f"{seen} captures"
+            out.append((o.id, f"seen by {by}, then in view and not detected by {n} others: removed"))
         else:
             keep.append(o)
     objects[:] = keep

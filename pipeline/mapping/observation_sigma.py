@@ -33,6 +33,11 @@ median regression of ``log(|along-ray error| / sigma)`` on the conditions, the c
 - **the object's own extent across the ray**: the across-ray sigma of a view of the whole object is at
   least its largest horizontal size times :data:`FACE_SPREAD` (a box's image centre is its visible faces'
   centre);
+- **a side hidden by a nearer object of its class** (:func:`occluded_sides`: a line of boxes seen along
+  its length, each box's image box ending where its nearer neighbour's begins): the centre across the
+  ray is known no better than the object's extent (:attr:`ObservationSigma.side_extent`, its largest
+  horizontal size over ``2 sqrt(3)``, level across the ray only); the association gate takes it on a
+  second try, when the narrow gate left such a view without its object;
 - **edge of the view** (the box centre farther than :data:`EDGE` of the half-width from the principal
   point) was measured too: fitted 0.91 once cut boxes are accounted for, so it has no factor.
 
@@ -49,7 +54,11 @@ from typing import Sequence
 
 import numpy as np
 
+from pipeline.mapping.occlusion import HIDDEN_GAP, TOUCH_PX, camera_distance, hidden_share, occluded_sides
 from pipeline.scene import Capture, SceneObject, Vec3
+
+__all__ = ["HIDDEN_GAP", "TOUCH_PX", "ObservationSigma", "camera_distance", "degenerate", "distance_to_box",
+           "hidden_share", "observation_sigma", "occluded_sides", "ray_covariance"]
 
 METHOD_SIGMA: dict[str, tuple[float, float]] = {
     "ground_truth": (0.02, 0.0),
@@ -117,9 +126,6 @@ HIDDEN = 0.7
 HIDDEN_FACTOR = 1.3
 """Along-ray sigma multiplier of a mostly hidden view (median regression on the tour: 1.31, 146 observations)."""
 
-HIDDEN_GAP = 0.3
-"""Another object is nearer when its camera distance is smaller by more than this [m]."""
-
 DEPTH_RANGE = 4.5
 """Farthest distance [m] a monocular depth model ranges well: the practical range of the Kinect v1
 that recorded NYU Depth v2, which the offline depth model (FastDepth) learnt from."""
@@ -152,6 +158,8 @@ class ObservationSigma:
             (:mod:`pipeline.mapping.map_extent`).
         gate_along: The along-ray sigma before the range factors (see :meth:`gate_covariance`).
         across_extent: The across-ray floor of a view cut on two or more sides [m] (0 otherwise).
+        side_extent: The across-ray floor [m] of a view whose side a nearer object of its class hides
+            (:func:`occluded_sides`; 0 otherwise): the gate's when ``wide`` (see :meth:`gate_covariance`).
         factors: What grew the sigmas beyond the method's (``near``, ``... behind nearer objects``,
             ``beyond the depth model's range``, ``cut on N sides``), for the object's history.
     """
@@ -166,6 +174,7 @@ class ObservationSigma:
     partial: bool = False
     gate_along: float = math.nan
     across_extent: float = 0.0
+    side_extent: float = 0.0
 
     @property
     def weight_sigma(self) -> float:
@@ -178,13 +187,24 @@ class ObservationSigma:
             return np.eye(3) * self.along**2
         return ray_covariance(position, self.camera, self.along, self.across)
 
-    def gate_covariance(self, position: Sequence[float]) -> np.ndarray:
+    def gate_covariance(self, position: Sequence[float], wide: bool = False) -> np.ndarray:
         """The covariance [m^2] the association gate uses: the method's (and cut) sigmas without the
-        range factors, which weigh a view less but must not widen its reach to the next object."""
+        range factors, which weigh a view less but must not widen its reach to the next object;
+        ``wide``: across the ray at least :attr:`side_extent` (a second try, see
+        :func:`pipeline.mapping.map_association.assign_capture`)."""
         along = self.gate_along if math.isfinite(self.gate_along) else self.along
         if self.camera is None:
             return np.eye(3) * along**2
-        return ray_covariance(position, self.camera, along, max(along * LATERAL_RATIO, self.across_extent))
+        across = max(along * LATERAL_RATIO, self.across_extent)
+        cov = ray_covariance(position, self.camera, along, across)
+        if wide and self.side_extent > across:  # a hidden left or right side: wider across the ray, level only
+            ray = np.asarray(position, dtype=np.float64) - np.asarray(self.camera, dtype=np.float64)
+            side = np.cross(ray, (0.0, 0.0, 1.0))
+            n = float(np.linalg.norm(side))
+            if n > 1e-9:
+                side /= n
+                cov = cov + (self.side_extent**2 - across**2) * np.outer(side, side)
+        return cov
 
 
 def ray_covariance(position: Sequence[float], camera: Sequence[float], along: float, across: float) -> np.ndarray:
@@ -205,17 +225,6 @@ def _image_size(capture: Capture | None) -> tuple[float, float] | None:
     if not w or not h or not (math.isfinite(w) and math.isfinite(h)):
         return None
     return float(w), float(h)
-
-
-def camera_distance(obj: SceneObject, capture: Capture | None) -> float | None:
-    """Camera-to-centre distance [m]: from the camera-frame position, else the capture's camera centre."""
-    cam = obj.source.positions.get("camera")
-    if cam is not None:
-        return float(math.dist(cam, (0.0, 0.0, 0.0)))
-    if capture is not None and capture.camera_position is not None:
-        return float(math.dist(capture.camera_position, obj.position))
-    fused = obj.source.distances.get("fused")
-    return None if fused is None else float(fused)
 
 
 def is_cut(obj: SceneObject, capture: Capture | None) -> bool:
@@ -275,40 +284,6 @@ def edge_offset(obj: SceneObject, capture: Capture | None) -> float:
     return abs((b[0] + b[2]) / 2 - cx) / (size[0] / 2)
 
 
-def hidden_share(obj: SceneObject, capture: Capture | None, others: Sequence[SceneObject]) -> float:
-    """Share of the object's box [0, 1] inside the boxes of nearer objects of the same capture
-    (nearer by more than :data:`HIDDEN_GAP` along their camera distance); 0 when unknown."""
-    b = obj.source.bbox
-    d = camera_distance(obj, capture)
-    if b is None or d is None or not others:
-        return 0.0
-    x0, y0, x1, y1 = (float(v) for v in b)
-    if x1 <= x0 or y1 <= y0:
-        return 0.0
-    rects = []
-    for o in others:
-        ob = o.source.bbox
-        if o is obj or ob is None or o.source.capture != obj.source.capture or o.label == obj.label:
-            continue
-        od = camera_distance(o, capture)
-        if od is None or od >= d - HIDDEN_GAP:
-            continue
-        rx0, ry0, rx1, ry1 = max(x0, ob[0]), max(y0, ob[1]), min(x1, ob[2]), min(y1, ob[3])
-        if rx1 > rx0 and ry1 > ry0:
-            rects.append((rx0, ry0, rx1, ry1))
-    if not rects:
-        return 0.0
-    xs = sorted({x0, x1, *(r[0] for r in rects), *(r[2] for r in rects)})
-    ys = sorted({y0, y1, *(r[1] for r in rects), *(r[3] for r in rects)})
-    covered = 0.0  # the union's area on the grid of the rectangles' edges
-    for xa, xb in zip(xs, xs[1:]):
-        for ya, yb in zip(ys, ys[1:]):
-            mx, my = (xa + xb) / 2, (ya + yb) / 2
-            if any(r[0] <= mx <= r[2] and r[1] <= my <= r[3] for r in rects):
-                covered += (xb - xa) * (yb - ya)
-    return min(1.0, covered / ((x1 - x0) * (y1 - y0)))
-
-
 def surface_distance(obj: SceneObject, capture: Capture | None) -> float | None:
     """Distance [m] from the capture's camera to the object's box (0 inside it), ``None`` if unknown."""
     if capture is None or capture.camera_position is None:
@@ -364,9 +339,13 @@ def observation_sigma(obj: SceneObject, capture: Capture | None = None,
     if sides >= 2:
         across = max(across, extent)
         factors.append(f"cut on {sides} sides")
+    hid = occluded_sides(obj, capture, others) if mapped and camera is not None else 0
+    side_extent = max(obj.size[0], obj.size[2]) * UNIFORM_STD if hid else 0.0
+    if hid:
+        factors.append(f"{hid} side{'s' if hid > 1 else ''} behind a nearer {obj.label}")
     return ObservationSigma(along, across, yaw, dist,
                             None if camera is None else tuple(float(v) for v in camera), cut,  # type: ignore[arg-type]
-                            tuple(factors), partial, gate_along, extent)
+                            tuple(factors), partial, gate_along, extent, side_extent)
 
 
 def distance_to_box(point: Sequence[float], centre: Sequence[float], size: Sequence[float], yaw: float) -> float:

@@ -79,3 +79,30 @@ def test_an_object_seen_whole_needs_two_misses_and_a_hidden_one_none() -> None:
         hidden, report = fuse(hidden, cap, check_consistency=False)
     assert {o.id for o in hidden.objects} == {"desk-1", "office_cabinet-1"}
     assert all(s.note != MISS_NOTE for s in hidden.object("desk-1").history)
+
+
+def test_a_false_chair_two_captures_saw_in_part_goes_after_two_misses_a_whole_desk_stays() -> None:
+    """Evidence counted: an object seen only in part by two captures (two false boxes that agreed, as the
+    noisy tour's suitcase) goes once two captures look and see nothing; one seen whole by two captures stays."""
+    false = [_obj("office_chair-1", "office_chair", (1.75 + 0.05 * k, 2.33, 0.525), CHAIR, f"bad-{k}",
+                  (375, 331, 489, 429)) for k in range(2)]
+    scene = Scene()
+    for k, o in enumerate(false):
+        scene, _ = fuse(scene, _capture(f"bad-{k}", (2.42 + 0.05 * k, 0.83, 0.35), math.pi / 2 + 0.55, o))
+    assert [o.id for o in scene.objects] == ["office_chair-1"]
+    assert {s.capture for s in scene.objects[0].history if s.used} == {"bad-0", "bad-1"}
+    looks = [_capture(f"look-{k}", (1.8 + 0.1 * k, 1.0, 0.35), math.pi / 2) for k in range(4)]
+    once, report = fuse(scene, looks[0], check_consistency=False)
+    assert [o.id for o in once.objects] == ["office_chair-1"] and not report.removed
+    twice, report = fuse(once, looks[1], check_consistency=False)
+    assert twice.objects == () and [r[0] for r in report.removed] == ["office_chair-1"]
+    assert "then in view and not detected by 2 others: removed" in report.removed[0][1]
+
+    desk = Scene()
+    for k in range(2):
+        desk, _ = fuse(desk, _capture(f"seen-{k}", (1.2 + 0.1 * k, 0.8, 0.35), math.pi / 2,
+                                      _obj("desk-1", "desk", (1.2, 2.95, 0.375), DESK, f"seen-{k}", (200, 150, 420, 330))))
+    for cap in looks:
+        desk, report = fuse(desk, cap, check_consistency=False)
+    assert [o.id for o in desk.objects] == ["desk-1"]  # seen whole by two captures: misses do not remove it
+    assert sum(1 for s in desk.object("desk-1").history if s.note == MISS_NOTE) == 4
