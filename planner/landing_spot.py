@@ -1,7 +1,9 @@
 """Where the robot may land: one rule for every way the console chooses a landing spot.
 
 Land here (straight down), Land here during a search (the nearest seen-free floor), the search's move
-beside its target, Go look, a mission's landing and Return all land through this rule:
+beside its target, Go look, a mission's landing and Return (at the take-off spot, or the nearest spot the
+rule fits when it no longer does, e.g. within the robot's radius of a wall: :func:`return_spots`) all
+land through this rule:
 :func:`landing_problem` for one spot, :func:`landing_mask` for every floor cell at once (the two agree on
 cell centres). Every mission the planner builds checks its landing spots with it
 (:func:`planner.mission.check_landing`).
@@ -209,4 +211,38 @@ def landing_mask(grid: PlanningGrid, forced: bool = False, clear: bool = False) 
     return ~bad
 
 
-__all__ = ["LandingProblem", "OBSTACLE_CELLS", "footprint", "landing_mask", "landing_problem", "unseen_footprint"]
+def return_spots(grid: PlanningGrid, launch: Sequence[float], limit: int = 8) -> tuple[list[tuple[float, float, float]], str]:
+    """Where Return may land, nearest first, and why not at the take-off spot ``launch`` (world [m]).
+
+    ``([launch], "")`` when the landing rule (:func:`landing_problem`) fits the take-off spot and the
+    planner does not close its floor cell; else the ``limit`` floor cell centres nearest to it in plan
+    where both hold (z = the floor), and the reason: ``too near the wall`` when its cell lies in the
+    workspace's edge band (within the robot's radius of a wall: :func:`planner.cspace.edge_closed`), else
+    the landing rule's or the planner's words. The list is empty when no floor cell fits."""
+    ws = grid.workspace
+    x, y = float(launch[0]), float(launch[1])
+    cell = ws.cell_of((x, y, ws.floor))
+    why = ""
+    if cell is None:
+        why = "outside the workspace"
+    elif grid.edge is not None and bool(grid.edge[cell[0], cell[1], 0]):
+        why = "too near the wall"
+    else:
+        problem = landing_problem(grid, (x, y))
+        if problem is not None:
+            why = problem.text
+        elif grid.state_at((cell[0], cell[1], 0)) is CellState.OCCUPIED:
+            why = "its floor cell is closed for the robot's size"
+    if not why:
+        return [(x, y, float(launch[2]) if len(launch) > 2 else ws.floor)], ""
+    ok = landing_mask(grid) & (grid.state[:, :, 0] != CellState.OCCUPIED)
+    idx = np.argwhere(ok)
+    if not len(idx):
+        return [], why
+    centres = ws.centers(np.column_stack([idx, np.zeros(len(idx), dtype=idx.dtype)]))
+    order = np.argsort(np.hypot(centres[:, 0] - x, centres[:, 1] - y), kind="stable")[:max(1, int(limit))]
+    return [(float(centres[n, 0]), float(centres[n, 1]), float(ws.floor)) for n in order], why
+
+
+__all__ = ["LandingProblem", "OBSTACLE_CELLS", "footprint", "landing_mask", "landing_problem", "return_spots",
+           "unseen_footprint"]

@@ -19,6 +19,7 @@ from typing import Callable, Mapping
 
 import numpy as np
 
+from planner.landing_spot import return_spots
 from planner.mission import Mission, MissionError
 from planner.route import path_points
 
@@ -402,17 +403,31 @@ class OperatorRules:
             return rules.land_here_mission(r, ws, f"land-{uuid.uuid4().hex[:6]}")
 
     def return_mission(self) -> Mission:
-        """Return as a mission: the Aerial-Ground A* from the robot's pose to the launch spot."""
+        """Return as a mission: the Aerial-Ground A* from the robot's pose to the launch spot, or, when the
+        landing rule no longer fits it (e.g. within the robot's radius of a wall), to the nearest spot it
+        fits (:func:`planner.landing_spot.return_spots`), which the operator is told."""
         with self._lock:  # type: ignore[attr-defined]
-            r, ws = self._robot, self._workspace  # type: ignore[attr-defined]
-            state = button_rules.return_home(r, self._run, ws, self._launch)  # type: ignore[attr-defined]
+            r, ws, home = self._robot, self._workspace, self._launch  # type: ignore[attr-defined]
+            state = button_rules.return_home(r, self._run, ws, home)  # type: ignore[attr-defined]
             origin = rules.robot_origin(r, ws) if r is not None else None
-            if not state.enabled or origin is None or self._launch is None:
+            if not state.enabled or origin is None or home is None:
                 raise SessionError(state.reason or "Return applies when the robot is armed or in the air")
-            res = self._route.plan(origin, self._launch)  # type: ignore[attr-defined]
+            spots, why = return_spots(self._grid, home)  # type: ignore[attr-defined]
+            if not spots:
+                raise SessionError(f"cannot plan the return: no floor spot fits the landing rule (the take-off spot "
+                                   f"{rules.fmt_point(home[:2])}: {why})")
+            for spot in spots:
+                res = self._route.plan(origin, spot)  # type: ignore[attr-defined]
+                if res.ok:
+                    break
             if not res.ok:
                 raise SessionError(f"cannot plan the return: {res.message}")
             try:
-                return rules.mission_from_path(res.cells, self._grid, f"return-{uuid.uuid4().hex[:6]}")  # type: ignore[attr-defined]
+                mission = rules.mission_from_path(res.cells, self._grid, f"return-{uuid.uuid4().hex[:6]}")  # type: ignore[attr-defined]
             except MissionError as exc:
                 raise SessionError(f"cannot fly the return: {exc}") from None
+        if why:
+            end = mission.segments[-1].end
+            self.notify("Return", f"Return: lands at {rules.fmt_point(end[:2])}, {rules.gap(end[:2], home[:2]):.2f} m "  # type: ignore[attr-defined]
+                        f"from the take-off spot {rules.fmt_point(home[:2])} ({why})")
+        return mission
