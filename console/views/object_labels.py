@@ -8,8 +8,9 @@ that tab's picture and kept greedily, most important first (the selected object'
 viewpoint (``search``, set by the search view), then the paths', then the nearest objects'), skipping any whose
 box would overlap one already kept, up to :data:`MAX_LABELS`.
 
-Labels every tab shares (server-wide nodes: the robot's, the agent's, the origin's) are always drawn and win: the decluttered ones leave them free (:func:`fixed_labels` reads them, with
-their text and where they are now, from the viser server), and the goal markers too (:meth:`ClientLabels.set_markers`).
+Labels every tab shares (server-wide nodes: the robot's, the agent's, the origin's) are always drawn and win:
+the decluttered ones leave them free (:func:`fixed_labels` reads them, with their text and where they are now,
+from the viser server), and the goal markers too (:meth:`ClientLabels.set_markers`).
 Zooming in spreads the objects apart and shows more labels; selecting an object always shows its label.
 
 Frames: world z up [m]; the tab's camera pose is viser's (``wxyz`` world <- camera, OpenCV optical
