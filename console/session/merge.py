@@ -9,7 +9,7 @@ from __future__ import annotations
 from pipeline.mapping.map_fusion import FusionReport, fuse
 from pipeline.scene import Scene
 
-__all__ = ["FusionReport", "fuse", "merge_observations"]
+__all__ = ["FusionReport", "fuse", "merge_observations", "merge_report"]
 
 
 def merge_observations(scene: Scene, new: Scene) -> tuple[Scene, list[str], list[str]]:
@@ -20,3 +20,9 @@ def merge_observations(scene: Scene, new: Scene) -> tuple[Scene, list[str], list
     """
     merged, report = fuse(scene, new, check_consistency=False)
     return merged, report.added, report.updated
+
+
+def merge_report(scene: Scene, new: Scene) -> tuple[Scene, FusionReport]:
+    """:func:`merge_observations` with the whole :class:`FusionReport` (what was merged into what, what was
+    removed and why), for the session to follow merged and removed objects (:mod:`console.session.object_follow`)."""
+    return fuse(scene, new, check_consistency=False)

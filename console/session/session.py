@@ -47,7 +47,8 @@ from console.session.capture_files import CAPTURE_DIR
 from console.session.history import History, Undo
 from console.session.known_space_state import KnownSpaceSession
 from console.session import goal_rules, mission_rules
-from console.session.merge import merge_observations
+from console.session.merge import merge_observations, merge_report
+from console.session.object_follow import ObjectFollow
 from console.session.operator_session import OperatorRules
 from console.views.picking import click_goal, ray_plane
 from console.session.session_reads import SessionReads
@@ -70,7 +71,7 @@ __all__ = [
 log = logging.getLogger(__name__)
 
 
-class Session(SessionReads, Persistence, Undo, OperatorRules, KnownSpaceSession):
+class Session(SessionReads, Persistence, Undo, OperatorRules, KnownSpaceSession, ObjectFollow):
     """All console state, thread-safe, observable, persisted in one folder (see :class:`Persistence`).
 
     Args:
@@ -308,16 +309,21 @@ class Session(SessionReads, Persistence, Undo, OperatorRules, KnownSpaceSession)
             with self._lock:
                 snapshot = self._scene
             if attempt < 2:
-                merged, added, updated = merge_observations(base_of(snapshot), scene)  # not under the lock
+                merged, rep = merge_report(base_of(snapshot), scene)  # not under the lock
             with self._lock:
                 if attempt == 2:
-                    merged, added, updated = merge_observations(base_of(self._scene), scene)
+                    merged, rep = merge_report(base_of(self._scene), scene)
                 elif self._scene is not snapshot:
                     continue  # the map changed while merging: merge again
+                selected, (added, updated) = self._selected, (rep.added, rep.updated)
                 notes = self._set_scene_locked(merged, f"spawn{what}", key)
+                reselected, follow = self._follow_fusion_locked(rep.merged, rep.removed, selected, self._run.active)
                 break
         log.info("spawned %d new and %d updated objects%s", len(added), len(updated), what)
-        self._emit([(SCENE, None), (GRID, None), (ROUTE, None), (MISSION, None)])
+        self._emit([(SCENE, None), (GRID, None), (ROUTE, None), (MISSION, None)]
+                   + ([(SELECTION, getattr(self.selected, "id", None))] if reselected else []))
+        if follow is not None:  # a candidate chosen by object whose object was merged: beside the survivor
+            self._replan_followed(follow)
         return SpawnReport(tuple(added), tuple(updated), tuple(notes))
 
     def delete_object(self, object_id: str) -> list[str]:

@@ -7,7 +7,8 @@ robot has moved more than :data:`MOVE_REFRESH` or turned more than :data:`TURN_R
 last summary; many changes in a row give one rebuild. "Go to" lists the objects (label and id);
 choosing one plans a candidate to the free floor cell beside it
 (:func:`planner.object_goal.goal_beside`, from where the next candidate starts) through the
-session's :meth:`~console.session.session.Session.add_goal`. World frame, metres.
+session's :meth:`~console.session.object_follow.ObjectFollow.go_to_object` (the goal follows the object
+if mapping merges it into another). World frame, metres.
 """
 
 from __future__ import annotations
@@ -20,14 +21,13 @@ from typing import Any
 
 import viser
 
-from planner.object_goal import ObjectGoalError, goal_beside
 from planner.route import Route
 from planner.scene_graph import build_scene_graph
 from planner.scene_summary import nice, summarize
 
 from console.views.client_notice import tell
 from console.wording import natural_key
-from console.session.session import GRID, ROBOT, SCENE, Session
+from console.session.session import GRID, ROBOT, SCENE, Session, SessionError
 
 log = logging.getLogger(__name__)
 
@@ -169,17 +169,13 @@ class SceneSummaryView:
         self._goto.value = PLACEHOLDER  # ready for the next choice (the same object again, too)
 
     def go_to(self, object_id: str, client: Any = None) -> bool:
-        """Plan a candidate to the floor beside ``object_id``; tell ``client`` how it went."""
-        session = self._session
-        snap = session.route_snapshot()
-        start = tuple(snap.registered[-1][-1]) if snap.registered else snap.start
-        grid = session.grid
+        """Plan a candidate to the floor beside ``object_id`` (:meth:`Session.go_to_object`: an id merged away
+        meanwhile goes to the object it was merged into, and the goal follows a later merge); tell ``client``."""
         try:
-            obj, app = goal_beside(session.scene, grid, object_id, start, Route(grid, start, session.weights))
-        except ObjectGoalError as exc:
+            res, obj, app = self._session.go_to_object(object_id)
+        except SessionError as exc:
             tell(client, "Cannot go there", str(exc), "red")
             return False
-        res = session.add_goal(app.goal)
         if not res.ok:
             tell(client, "Goal not reachable", res.message, "red")
             return False

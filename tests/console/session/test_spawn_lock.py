@@ -16,7 +16,7 @@ def test_spawn_merges_outside_the_session_lock(tmp_path: Path, monkeypatch: pyte
 
     s = Session(tmp_path / "session", start=(2.5, 0.7, 0.0))
     started, release, held = threading.Event(), threading.Event(), []
-    real = session_module.merge_observations
+    real = session_module.merge_report
 
     def slow_merge(scene: Scene, new: Scene):  # type: ignore[no-untyped-def]
         held.append(s._lock._is_owned() if hasattr(s._lock, "_is_owned") else None)
@@ -24,7 +24,7 @@ def test_spawn_merges_outside_the_session_lock(tmp_path: Path, monkeypatch: pyte
         release.wait(10)
         return real(scene, new)
 
-    monkeypatch.setattr(session_module, "merge_observations", slow_merge)
+    monkeypatch.setattr(session_module, "merge_report", slow_merge)
     obj = SceneObject("box-1", "cardboard_box", (1.0, 5.0, 0.2), (0.4, 0.4, 0.4), source=Source(method="ground_truth"))
     t = threading.Thread(target=s.spawn, args=(Scene(objects=(obj,)),), kwargs={"origin": "file a.json"})
     t.start()
