@@ -107,6 +107,7 @@ def test_what_a_new_operator_sees(captured_console: ConsoleApp, browser: Any, tm
         target = lambda: page.get_by_label("Find", exact=True)  # noqa: E731
         click_until(lambda: page.get_by_text("Find", exact=True).first, lambda: target().is_visible(), "the Find folder")
         target().fill("unicorn")
+        wait_for(lambda: str(app.views["search"].target.value) == "unicorn", "the Find field on the server")
         click_until(button(page, "Start search"), lambda: bool(_notices(page, "Not possible")), "the refusal")
         note = _notices(page, "Not possible")[-1]
         page.screenshot(path=str(tmp_path / f"find-refused-{width}x{height}.png"))
@@ -129,8 +130,10 @@ def test_what_a_new_operator_sees(captured_console: ConsoleApp, browser: Any, tm
         wait_for(yellow_drawn, "the yellow cells drawn")
         closed = grid_view.drawn_counts()["dangerous"]
         box = lambda: page.get_by_label("Plan into unknown space", exact=True)  # noqa: E731
-        click_until(box, lambda: s.plan_unknown == "allow", "Plan into unknown space")
-        wait_for(lambda: s.grid.rule == "allow" and yellow_drawn(), "the yellow cells drawn again")
+        click_until(box, lambda: box().is_checked(), "Plan into unknown space")  # (the page's state: a click that
+        # took is never undone by a second one while the server is still rebuilding the grid)
+        wait_for(lambda: s.plan_unknown == "allow" and s.grid.rule == "allow" and yellow_drawn(),
+                 "the yellow cells drawn again")
         allowed = grid_view.drawn_counts()["dangerous"]
         unseen = int(s.grid.unseen.sum()) if s.grid.unseen is not None else 0
         print(f"yellow cells drawn at {width}x{height}: {closed} with unknown space closed, {allowed} planning into it "
