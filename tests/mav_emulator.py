@@ -3,12 +3,9 @@
 It implements the behaviours the MAVLink link relies on, the way ArduPilot Copter does them:
 
 - HEARTBEAT (type QUADROTOR, autopilot ARDUPILOTMEGA, Copter custom mode, armed flag);
-- MAV_CMD_DO_SET_MODE with Copter mode numbers, answered by COMMAND_ACK; commands are answered
-  only when addressed to the autopilot (component 1 or 0);
-- MAV_CMD_COMPONENT_ARM_DISARM (arming only in armable modes and when pre-arm checks pass, else
-  MAV_RESULT_FAILED with a ``PreArm: ...`` STATUSTEXT; disarming only when landed);
-- MAV_CMD_NAV_TAKEOFF (only in GUIDED, armed and landed), altitude above the origin in param7;
-- MAV_CMD_DO_CHANGE_SPEED (types 0/1 horizontal, 2 climb, 3 descent); GUIDED entering position
+- COMMAND_LONGs answered as ArduPilot Copter answers them (only when addressed to the autopilot,
+  component 1 or 0; each COMMAND_ACK addressed to its sender): modes, arming, take-off (altitude above
+  home), speeds (GUIDED / AUTO only): :mod:`mav_emulator_commands`; GUIDED entering position
   control (the first position target after a mode change, a take-off or velocity targets) sets the
   speed back to WPNAV_SPEED (``fly_speed``), as ``ArduCopter/mode_guided.cpp`` does (see
   :mod:`mav_emulator_physics`); RTL climbs to ``RTL_ALT`` and flies home (``mode_rtl.cpp``);
@@ -48,13 +45,11 @@ from typing import Any
 
 from pymavlink import mavutil
 
+from mav_emulator_commands import MODES, VehicleCommands
 from mav_emulator_events import EKF_GPS_GLITCH, VehicleEvents
 from mav_emulator_physics import CopterPhysics
 
 mav = mavutil.mavlink
-MODES = {name: num for num, name in mavutil.mode_mapping_acm.items()}
-NAMES = dict(mavutil.mode_mapping_acm)
-ARMABLE = {"GUIDED", "LOITER", "STABILIZE", "ALT_HOLD", "POSHOLD"}
 STREAMS = ("LOCAL_POSITION_NED", "ATTITUDE", "SYS_STATUS", "EXTENDED_SYS_STATE", "EKF_STATUS_REPORT")
 DATA_STREAM_GROUPS = {2: ("SYS_STATUS", "EXTENDED_SYS_STATE"), 6: ("LOCAL_POSITION_NED",), 10: ("ATTITUDE",),
                       12: ("EKF_STATUS_REPORT",)}
@@ -85,6 +80,7 @@ class Record:
     mode_sources: list[tuple[str, str]] = field(default_factory=list)  # (mode, "gcs" or the vehicle's reason)
     target_times: list[float] = field(default_factory=list)  # monotonic [s] of each position target
     targets_ignored: int = 0  # targets outside GUIDED (ArduPilot ignores them)
+    targets_invalid: int = 0  # targets with a frame / type mask GUIDED does not take (the vehicle stopped)
     speed_resets: int = 0  # GUIDED entering position control (speed back to WPNAV_SPEED)
     max_height: float = 0.0  # highest point flown [m above the origin]
     rtl_top: float = 0.0  # height RTL climbed to [m]
@@ -100,7 +96,7 @@ class Record:
     max_speed: float = 0.0  # fastest horizontal speed flown [m/s]
 
 
-class ArduCopterEmulator(CopterPhysics, VehicleEvents):
+class ArduCopterEmulator(CopterPhysics, VehicleEvents, VehicleCommands):
     """A simulated ArduPilot Copter sending to a GCS listening on ``127.0.0.1:gcs_port``.
 
     Args:
@@ -113,12 +109,15 @@ class ArduCopterEmulator(CopterPhysics, VehicleEvents):
         telemetry_rate: LOCAL_POSITION_NED / ATTITUDE rate [Hz].
         drop: Fraction of packets lost, each direction.
         seed: Random seed of the packet loss.
-        start_ned: Initial position (NED) [m].
+        start_ned: Initial position (NED) [m], on the ground (the ground's height stays there: a robot
+            standing on a box above the EKF origin starts at z < 0).
         system: MAVLink system id.
         reboot_silence: How long a reboot keeps the vehicle silent [s].
         url: Another pymavlink connection instead of UDP to ``gcs_port`` (``tcpin:127.0.0.1:PORT``:
             the vehicle listens on TCP like SITL's serial port 0).
     """
+
+    STREAM_NAMES = STREAMS
 
     def __init__(self, gcs_port: int, *, walk_speed: float = 2.0, fly_speed: float = 4.0,
                  climb_rate: float = 3.0, descent_rate: float = 3.0, accel: float = 50.0, brake_decel: float = 50.0,
@@ -147,6 +146,8 @@ class ArduCopterEmulator(CopterPhysics, VehicleEvents):
         self.ignore_commands: set[int] = set()
         self.prearm_failure: str | None = None
         self.reason_after_ack = False
+        self.foreign_acks: dict[int, int] = {}  # command -> result also sent to another GCS (254/190) first
+        self.gcs_blocked_modes: set[str] = set()  # FLTMODE_GCSBLOCK
         self.ekf_ready = True
         self.message_interval_supported = True
         self.streams_need_request = False
@@ -160,7 +161,11 @@ class ArduCopterEmulator(CopterPhysics, VehicleEvents):
         self.ekf_fault_until = 0.0  # monotonic [s]: EKF_STATUS_REPORT reports a glitch until then
         self.physics_step = PHYSICS_STEP
         self.after_heartbeat: Any = None  # called (no arguments) right after each autopilot heartbeat is sent
-        self.params = {"FS_GCS_ENABLE": 1.0, "FS_GCS_TIMEOUT": 5.0, "FS_EKF_ACTION": 1.0, "RTL_ALT": 1500.0}
+        self.params = {"FS_GCS_ENABLE": 1.0, "FS_GCS_TIMEOUT": 5.0, "FS_EKF_ACTION": 1.0, "RTL_ALT": 1500.0,
+                       "SYSID_MYGCS": 255.0}
+        self.gcs_failsafe_auto = False  # the GCS failsafe of events.cpp runs by itself (FS_GCS_*, SYSID_MYGCS)
+        self.gcs_last_seen = 0.0  # monotonic [s] of the last heartbeat from SYSID_MYGCS (0: never)
+        self.failsafe_gcs = False
         self.record = Record()
         self.lock = threading.RLock()
         self._queue: list[tuple[Any, float]] = []  # (message, monotonic [s] read) while blocked
@@ -172,11 +177,14 @@ class ArduCopterEmulator(CopterPhysics, VehicleEvents):
         self.armed = False
         self.landed_state = mav.MAV_LANDED_STATE_ON_GROUND
         self.pos = list(start_ned)
+        self.ground_down = float(start_ned[2])  # it starts on the ground (a raised one: z < 0)
         self.vel = [0.0, 0.0, 0.0]
         self.yaw = 0.0
         self.target: list[float] | None = None  # position target (NED)
         self.vtarget: list[float] | None = None  # velocity target (NED)
+        self.vtarget_time = 0.0  # monotonic [s] of the last velocity target
         self.takeoff_alt: float | None = None
+        self.home_down = 0.0  # NED z of home (set where the vehicle arms)
         self.cmd_speed: float | None = None
         self.guided_sub = "vel"
         self.rtl_stage = "climb"
@@ -227,6 +235,7 @@ class ArduCopterEmulator(CopterPhysics, VehicleEvents):
             self.origin = (lat, lon, self.origin[2])
             self.pos, self.vel = [0.0, 0.0, 0.0], [0.0, 0.0, 0.0]
             self.mode, self.armed, self.target, self.vtarget, self.cmd_speed = "STABILIZE", False, None, None, None
+            self.home_down = self.ground_down = 0.0
             self.landed_state = mav.MAV_LANDED_STATE_ON_GROUND
             self.streaming = set() if self.streams_need_request else set(STREAMS)
             self.reboots += 1
@@ -259,10 +268,6 @@ class ArduCopterEmulator(CopterPhysics, VehicleEvents):
         if enc is None:
             enc = self._encoders[(system, component)] = mav.MAVLink(self.conn, srcSystem=system, srcComponent=component)
         getattr(enc, name)(*args)
-
-    def _ack(self, command: int, result: int, confirmation: int) -> None:
-        self.record.commands.append((command, confirmation, result))
-        self._send("command_ack_send", command, result)
 
     def say(self, text: str, severity: int = mav.MAV_SEVERITY_INFO) -> None:
         """Send a STATUSTEXT (at most 50 characters, as MAVLink 1 carries)."""
@@ -306,6 +311,8 @@ class ArduCopterEmulator(CopterPhysics, VehicleEvents):
                 next_slow = now + 0.25
                 if self.telemetry_enabled:
                     self._slow_telemetry()
+            with self.lock:
+                self._failsafe_gcs_check(now)
             if now >= next_prearm:
                 next_prearm = now + 1.0
                 if not self.ekf_ready and not self.armed:
@@ -374,6 +381,7 @@ class ArduCopterEmulator(CopterPhysics, VehicleEvents):
         kind = msg.get_type()
         if kind == "HEARTBEAT":
             self.record.gcs_heartbeats += 1
+            self._gcs_heartbeat(msg)
         elif kind == "TIMESYNC":
             self.record.timesyncs += 1
             self._timesync(msg)
@@ -393,87 +401,6 @@ class ArduCopterEmulator(CopterPhysics, VehicleEvents):
             if name in self.params:
                 self._send("param_value_send", name.encode(), self.params[name], mav.MAV_PARAM_TYPE_REAL32,
                            len(self.params), list(self.params).index(name))
-
-    def _command(self, m: Any) -> None:
-        cmd, conf = int(m.command), int(m.confirmation)
-        self.record.received.append((cmd, conf))
-        if cmd in self.ignore_commands:
-            return
-        if cmd in self.refuse_commands:
-            return self._ack(cmd, mav.MAV_RESULT_UNSUPPORTED, conf)
-        if cmd == mav.MAV_CMD_DO_SET_MODE:
-            name = NAMES.get(int(m.param2))
-            if name is None:
-                return self._ack(cmd, mav.MAV_RESULT_FAILED, conf)
-            if name in self.ignore_modes:
-                return None
-            if self.deny_modes.get(name, 0) > 0:
-                self.deny_modes[name] -= 1
-                return self._ack(cmd, mav.MAV_RESULT_DENIED, conf)
-            self._enter_mode(name)
-            return self._ack(cmd, mav.MAV_RESULT_ACCEPTED, conf)
-        if cmd == mav.MAV_CMD_COMPONENT_ARM_DISARM:
-            if m.param1 >= 0.5:
-                if not self.armed and self.mode not in ARMABLE:
-                    return self._ack(cmd, mav.MAV_RESULT_FAILED, conf)
-                reason = self.prearm_failure or (None if self.ekf_ready else "Need Position Estimate")
-                if not self.armed and reason:
-                    text = reason if reason.startswith(("PreArm:", "Arm:")) else f"PreArm: {reason}"
-                    if not self.reason_after_ack:
-                        self.say(text, mav.MAV_SEVERITY_CRITICAL)
-                    self._ack(cmd, mav.MAV_RESULT_FAILED, conf)
-                    if self.reason_after_ack:
-                        self.say(text, mav.MAV_SEVERITY_CRITICAL)
-                    return None
-                self.armed = True
-            else:
-                if self.landed_state != mav.MAV_LANDED_STATE_ON_GROUND and int(m.param2) != 21196:
-                    return self._ack(cmd, mav.MAV_RESULT_FAILED, conf)
-                self.armed = False
-            return self._ack(cmd, mav.MAV_RESULT_ACCEPTED, conf)
-        if cmd == mav.MAV_CMD_NAV_TAKEOFF:
-            alt = float(m.param7)
-            if (self.mode != "GUIDED" or not self.armed
-                    or self.landed_state != mav.MAV_LANDED_STATE_ON_GROUND or alt <= -self.pos[2]):
-                return self._ack(cmd, mav.MAV_RESULT_FAILED, conf)
-            self.record.takeoff_altitudes.append(alt)
-            self.takeoff_alt = alt
-            self.guided_sub = "takeoff"
-            self.landed_state = mav.MAV_LANDED_STATE_TAKEOFF
-            self.target = None
-            return self._ack(cmd, mav.MAV_RESULT_ACCEPTED, conf)
-        if cmd == mav.MAV_CMD_DO_CHANGE_SPEED:
-            kind, speed = int(m.param1), float(m.param2)
-            self.record.speeds.append((kind, speed))
-            if not (speed > 0 and math.isfinite(speed)):
-                return self._ack(cmd, mav.MAV_RESULT_FAILED, conf)
-            if kind in (0, 1):
-                self.cmd_speed = speed
-            elif kind == 2:
-                self.climb_rate = speed
-            elif kind == 3:
-                self.descent_rate = speed
-            return self._ack(cmd, mav.MAV_RESULT_ACCEPTED, conf)
-        if cmd == mav.MAV_CMD_SET_MESSAGE_INTERVAL:
-            if not self.message_interval_supported:
-                return self._ack(cmd, mav.MAV_RESULT_UNSUPPORTED, conf)
-            self.record.intervals.append((int(m.param1), float(m.param2)))
-            name = mav.mavlink_map[int(m.param1)].msgname if int(m.param1) in mav.mavlink_map else ""
-            if name in STREAMS:
-                self.streaming.add(name)
-            return self._ack(cmd, mav.MAV_RESULT_ACCEPTED, conf)
-        if cmd == mav.MAV_CMD_REQUEST_MESSAGE:
-            self._ack(cmd, mav.MAV_RESULT_ACCEPTED, conf)
-            if int(m.param1) == mav.MAVLINK_MSG_ID_GPS_GLOBAL_ORIGIN:
-                lat, lon, alt = self.origin
-                self._send("gps_global_origin_send", int(lat * 1e7), int(lon * 1e7), int(alt * 1000))
-            return None
-        if cmd == mav.MAV_CMD_PREFLIGHT_REBOOT_SHUTDOWN:
-            if self.armed:
-                return self._ack(cmd, mav.MAV_RESULT_FAILED, conf)
-            self._ack(cmd, mav.MAV_RESULT_ACCEPTED, conf)
-            return self.reboot()
-        self._ack(cmd, mav.MAV_RESULT_UNSUPPORTED, conf)
 
 
 def free_udp_port() -> int:

@@ -70,11 +70,31 @@ class VehicleEvents:
             if self.armed and self.landed_state != mav.MAV_LANDED_STATE_ON_GROUND:
                 self._enter_mode(action, by="battery failsafe")
 
-    def gcs_failsafe(self) -> None:
+    def gcs_failsafe(self, action: str = "RTL") -> None:
         """The vehicle's own GCS failsafe (FS_GCS_ENABLE): RTL or LAND after its heartbeat timeout."""
         with self.lock:
             self.say("GCS Failsafe", mav.MAV_SEVERITY_CRITICAL)
-            self._enter_mode("RTL", by="gcs failsafe")
+            self._enter_mode(action, by="gcs failsafe")
+
+    def _gcs_heartbeat(self, msg: Any) -> None:
+        """GCS_Mavlink.cpp: only heartbeats from system SYSID_MYGCS count for the GCS failsafe."""
+        if msg.get_srcSystem() == int(self.params.get("SYSID_MYGCS", 255)):
+            self.gcs_last_seen = time.monotonic()
+
+    def _failsafe_gcs_check(self, now: float) -> None:
+        """events.cpp failsafe_gcs_check (with ``gcs_failsafe_auto``): enabled, a GCS seen once, silent for
+        FS_GCS_TIMEOUT -> the failsafe (armed and flying: RTL; FS_GCS_ENABLE 5: LAND); heard again -> cleared,
+        the mode stays the failsafe's."""
+        if not self.gcs_failsafe_auto or not self.params.get("FS_GCS_ENABLE") or self.gcs_last_seen == 0.0:
+            return
+        late = now - self.gcs_last_seen > self.params.get("FS_GCS_TIMEOUT", 5.0)
+        if late and not self.failsafe_gcs:
+            self.failsafe_gcs = True
+            if self.armed and self.landed_state != mav.MAV_LANDED_STATE_ON_GROUND:
+                self.gcs_failsafe("LAND" if self.params.get("FS_GCS_ENABLE") == 5 else "RTL")
+        elif not late and self.failsafe_gcs:
+            self.failsafe_gcs = False
+            self.say("GCS Failsafe Cleared", mav.MAV_SEVERITY_CRITICAL)
 
     def fence_breach(self) -> None:
         """A fence breach with FENCE_ACTION brake: BRAKE, with its STATUSTEXT."""

@@ -8,6 +8,9 @@ Read from the firmware (ArduPilot/ardupilot), never copied:
   ``pva_control_start``), which sets the horizontal speed back to the default ``WPNAV_SPEED``; a
   ``MAV_CMD_DO_CHANGE_SPEED`` (``set_speed_xy``) changes the speed of the controller running now, so a
   speed sent *before* the first position target is lost;
+- ``ArduCopter/GCS_Mavlink.cpp`` (``handle_message_set_position_target_local_ned``) and
+  ``mode_guided.cpp``: the frames and type masks GUIDED takes, an invalid one stops the vehicle
+  (``init(true)``), a velocity target not renewed within ``GUID_TIMEOUT`` (3 s) is zeroed;
 - ``ArduCopter/mode_rtl.cpp``: RTL climbs to ``RTL_ALT`` (or stays higher if already above it), returns
   to home at the waypoint speed, descends and lands (then disarms);
 - ``ArduCopter/mode_land.cpp`` / ``mode_brake.cpp``: LAND descends while the horizontal motion decays,
@@ -43,6 +46,7 @@ class CopterPhysics:
     cmd_speed: float | None
     guided_sub: str  # "vel" (GUIDED just entered), "pos", "takeoff"
     rtl_stage: str  # "climb", "return", "descend"
+    ground_down: float  # NED z of the ground under the vehicle [m] (a raised floor: negative)
     params: dict[str, float]
     record: Any
 
@@ -67,31 +71,64 @@ class CopterPhysics:
             self.landed_state = mav.MAV_LANDED_STATE_LANDING
             self.takeoff_alt = None
 
+    def _guided_stop(self) -> None:
+        """GUIDED ``init(true)``: an invalid target stops the vehicle (velocity control, zero target)."""
+        self.record.targets_invalid += 1
+        self.target, self.vtarget, self.guided_sub = None, [0.0, 0.0, 0.0], "vel"
+        self.vtarget_time = time.monotonic()
+
     def _position_target(self, m: Any) -> None:
+        """GCS_Mavlink.cpp handle_message_set_position_target_local_ned: GUIDED only; frames LOCAL_NED,
+        LOCAL_OFFSET_NED (offset from where the vehicle is), BODY_NED / BODY_OFFSET_NED (offset rotated
+        by its yaw, yaw relative); position, velocity or both (acceleration alone: hold); any other frame
+        or mask (force without acceleration ignored, nothing to use) stops the vehicle."""
         mask = int(m.type_mask)
         self.record.targets.append((float(m.x), float(m.y), float(m.z), mask))
         self.record.target_times.append(time.monotonic())
-        if self.mode != "GUIDED" or m.coordinate_frame != mav.MAV_FRAME_LOCAL_NED:
+        if self.mode != "GUIDED":
             self.record.targets_ignored += 1
             return
+        frame = int(m.coordinate_frame)
+        body = frame in (mav.MAV_FRAME_BODY_NED, mav.MAV_FRAME_BODY_OFFSET_NED)
+        if frame not in (mav.MAV_FRAME_LOCAL_NED, mav.MAV_FRAME_LOCAL_OFFSET_NED) and not body:
+            return self._guided_stop()
+        pos_ignore, vel_ignore, acc_ignore = bool(mask & 0b111), bool(mask & 0b111000), bool(mask & 0b111000000)
+        if mask & 512 and not acc_ignore:  # FORCE_SET: force inputs are not supported
+            return self._guided_stop()
+        if pos_ignore and vel_ignore and not acc_ignore:
+            self.target, self.vtarget = None, [0.0, 0.0, 0.0]  # acceleration targets: held here
+            self.vtarget_time = time.monotonic()
+            return None
+        if pos_ignore and vel_ignore:
+            return self._guided_stop()
+        c, s_ = math.cos(self.yaw), math.sin(self.yaw)
+        x, y, z = float(m.x), float(m.y), float(m.z)
+        vx, vy, vz = float(m.vx), float(m.vy), float(m.vz)
+        if body:
+            x, y = c * x - s_ * y, s_ * x + c * y
+            vx, vy = c * vx - s_ * vy, s_ * vx + c * vy
+        if frame != mav.MAV_FRAME_LOCAL_NED:
+            x, y, z = x + self.pos[0], y + self.pos[1], z + self.pos[2]
         on_ground = self.landed_state == mav.MAV_LANDED_STATE_ON_GROUND
         if not mask & 1024:
-            self.yaw = float(m.yaw)
-        if not mask & 0b111:  # position target
-            if on_ground and abs(m.z - 0.0) > 0.2:
-                return  # a landed copter ignores targets in the air (take off first)
+            self.yaw = float(m.yaw) + (self.yaw if body else 0.0)
+        if not pos_ignore:  # position target (position + velocity flies to the position here)
+            if on_ground and abs(z - self.ground_down) > 0.2:
+                return None  # a landed copter ignores targets in the air (take off first)
             if self.guided_sub != "pos":  # pos_control_start -> pva_control_start: WPNAV_SPEED again
                 self.guided_sub = "pos"
                 self.cmd_speed = None
                 self.record.speed_resets += 1
-            self.target = [float(m.x), float(m.y), 0.0 if on_ground else float(m.z)]
+            self.target = [x, y, self.ground_down if on_ground else z]
             self.vtarget = None
-        elif not mask & 0b111000:  # velocity target
+        else:  # velocity target, zeroed after GUID_TIMEOUT without a new one (velaccel_control_run)
             if self.guided_sub != "vel":
                 self.guided_sub = "vel"
                 self.cmd_speed = None
-            self.vtarget = [float(m.vx), float(m.vy), 0.0 if on_ground else float(m.vz)]
+            self.vtarget = [vx, vy, 0.0 if on_ground else vz]
+            self.vtarget_time = time.monotonic()
             self.target = None
+        return None
 
     def _brake(self, dt: float, horizontal_only: bool = False) -> None:
         axes = 2 if horizontal_only else 3
@@ -157,16 +194,18 @@ class CopterPhysics:
         elif ls == mav.MAV_LANDED_STATE_LANDING or (self.mode == "LAND" and ls == mav.MAV_LANDED_STATE_IN_AIR):
             self.landed_state = mav.MAV_LANDED_STATE_LANDING
             self._brake(dt, horizontal_only=True)  # LAND does not stop horizontal motion at once
-            self.vel[2] = min(self.descent_rate, -self.pos[2] / dt)
-            if self.pos[2] + self.vel[2] * dt >= -1e-9:
+            self.vel[2] = min(self.descent_rate, (self.ground_down - self.pos[2]) / dt)
+            if self.pos[2] + self.vel[2] * dt >= self.ground_down - 1e-9:
                 self.landed_state = mav.MAV_LANDED_STATE_ON_GROUND
                 self.armed = False  # ArduPilot disarms after landing
                 self.target = None
                 self.vel = [0.0, 0.0, 0.0]
-                self.pos[2] = 0.0
+                self.pos[2] = self.ground_down
         elif self.mode in RETURNING and ls == mav.MAV_LANDED_STATE_IN_AIR:
             self._rtl(dt)
         elif self.mode == "GUIDED" and self.vtarget is not None:
+            if time.monotonic() - self.vtarget_time > self.params.get("GUID_TIMEOUT", 3.0):
+                self.vtarget = [0.0, 0.0, 0.0]  # no new velocity for GUID_TIMEOUT: stop
             self.vel = list(self.vtarget)
         elif self.mode == "GUIDED" and self.target is not None:
             on_ground = ls == mav.MAV_LANDED_STATE_ON_GROUND
@@ -179,7 +218,7 @@ class CopterPhysics:
         if arrived:
             self.vel[2] = 0.0
         if self.landed_state == mav.MAV_LANDED_STATE_ON_GROUND:
-            self.pos[2], self.vel[2] = 0.0, 0.0
+            self.pos[2], self.vel[2] = self.ground_down, 0.0
         self.record.max_speed = max(self.record.max_speed, math.hypot(self.vel[0], self.vel[1]))
         self.record.max_height = max(self.record.max_height, -self.pos[2])
         self.battery = max(0.0, self.battery - (0.05 if self.armed else 0.001) * dt)

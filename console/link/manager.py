@@ -483,8 +483,10 @@ class MissionManager(SafetyMixin):
                 self._failsafe()
             elif status is MissionStatus.FAILSAFE and not self._told_back and self._link_back():
                 self._told_back = True
-                self._emit("warning", f"link restored after the failsafe: {self._robot_now()} "
-                                      "(resume or abort)")
+                taken = self._vehicle_control()  # its own failsafe's mode: resume is refused, do not offer it
+                self._emit("warning", f"link restored after the failsafe: {self._robot_now()} " + (
+                    f"({taken}: the console sends nothing; take control first, or abort)" if taken
+                    else "(resume or abort)"))
         self._emit("info", "mission resumed", status=MissionStatus.RUNNING)
         return True
 

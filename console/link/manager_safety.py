@@ -271,7 +271,9 @@ class SafetyMixin:
 
     def _restored(self, when: str) -> None:
         self._told_back = True
-        self._emit("warning", f"link restored {when}: {self._robot_now()}; mission paused (resume or abort)",
+        taken = self._vehicle_control()  # the vehicle's own failsafe mode: resume is refused, do not offer it
+        then = f"{taken}: the console sends nothing; take control first, or abort" if taken else "resume or abort"
+        self._emit("warning", f"link restored {when}: {self._robot_now()}; mission paused ({then})",
                    status=self._status_enum.PAUSED)
 
 

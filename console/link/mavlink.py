@@ -88,7 +88,8 @@ class MavlinkLink(RobotLink):
         self._counters: dict[str, int] = {"retries": 0, "nacks": 0}
         self.telemetry = Telemetry(config.source_system, config.heartbeat_timeout, config.autopilot_component,
                                    config.max_range, config.max_speed, on_epoch=self._on_epoch,
-                                   vehicle_max_speed=config.vehicle_max_speed)
+                                   vehicle_max_speed=config.vehicle_max_speed,
+                                   source_component=config.source_component)
         self.transport = MavTransport(url, config.source_system, config.source_component, self.telemetry.handle,
                                       tlog, on_reconnect=self.telemetry.new_epoch,
                                       silence=self.telemetry.silence,

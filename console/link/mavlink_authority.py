@@ -6,7 +6,9 @@ command (RTL or LAND chosen by a battery / GCS / EKF failsafe, BRAKE by a fence,
 switch, a second ground station) means the vehicle (or someone else) took control: the console sends
 no more targets and no mode command of its own until the operator explicitly takes control again
 (:meth:`ModeAuthority.take_control`). The reason is the vehicle's own STATUSTEXT around the change
-(``vehicle took control: mode RTL (Battery 1 is low 10.40V used 4200 mAh)``).
+(``vehicle took control: mode RTL (Battery 1 is low 10.40V used 4200 mAh)``); a mode first seen in the
+heartbeat that ends a silence was chosen while the console could not hear the vehicle, and says so
+(``vehicle took control: mode RTL while the console could not hear it (7.5 s) (GCS Failsafe (now cleared))``).
 
 :class:`EstimatorWatch` flags position steps the vehicle cannot have flown (an EKF position reset, a GPS
 glitch: a step larger than ``max_speed x dt + margin`` between two LOCAL_POSITION_NED samples) and the
@@ -39,6 +41,7 @@ class Takeover:
     mode: str
     time: float  # monotonic [s]
     previous: str
+    unheard: float = 0.0  # [s] the vehicle had been silent before the heartbeat that showed it (0: heard)
 
 
 class ModeAuthority:
@@ -58,8 +61,9 @@ class ModeAuthority:
         self.taken: Takeover | None = None
         self.current: str | None = None
 
-    def observe(self, mode: str) -> Takeover | None:
-        """One heartbeat's mode; returns a new takeover, if this is one."""
+    def observe(self, mode: str, unheard: float = 0.0) -> Takeover | None:
+        """One heartbeat's mode; returns a new takeover, if this is one. ``unheard`` [s]: the heartbeat
+        ends a silence that long (the mode was chosen while the console could not hear the vehicle)."""
         previous, self.current = self.current, mode
         if self.expected is None or self.taken is not None or mode in self.pending:
             return None
@@ -70,7 +74,7 @@ class ModeAuthority:
             return None
         if not self.confirmed and mode == self.before:
             return None  # a heartbeat sent before our mode change took effect
-        self.taken = Takeover(mode, time.monotonic(), previous or "")
+        self.taken = Takeover(mode, time.monotonic(), previous or "", unheard)
         return self.taken
 
     def commanding(self, mode: str) -> None:
@@ -91,23 +95,31 @@ class ModeAuthority:
             raise VehicleInControl(f"{what} not sent: {self.describe()}")
 
     def reason(self) -> str:
-        """The vehicle's own words around the takeover (warning or worse, 5 s before to 2 s after)."""
+        """The vehicle's own words around the takeover (warning or worse, 5 s before to 2 s after; 5 s after
+        a takeover seen when the link returned: a failsafe's "... Cleared" comes once it hears us)."""
         t = self.taken
         if t is None:
             return ""
         lines = [(at, text) for at, sev, text in self.reasons()
-                 if sev <= 4 and t.time - 5.0 <= at <= t.time + 2.0 and not text.startswith("WARNING: link:")]
+                 if sev <= 4 and t.time - 5.0 <= at <= t.time + (5.0 if t.unheard else 2.0)
+                 and not text.startswith("WARNING: link:")]
         before = [x for x in lines if x[0] <= t.time]
         pick = before[-1] if before else (lines[0] if lines else None)
-        return pick[1].split(": ", 1)[-1] if pick else ""
+        text = pick[1].split(": ", 1)[-1] if pick else ""
+        # a failsafe's lines sent while the link was down are lost; its "... Cleared" (events.cpp
+        # failsafe_*_off_event) sent once heard again names it: the mode it chose stays
+        return text.removesuffix(" Cleared") + " (now cleared)" if text.endswith(" Cleared") else text
 
     def describe(self) -> str:
         """``vehicle took control: mode RTL (Battery 1 is low ...)`` or ``""``."""
         t = self.taken
         if t is None:
             return ""
-        why = self.reason() or "no reason given: another ground station, the pilot's mode switch or a script"
-        return f"vehicle took control: mode {t.mode} ({why})"
+        why = self.reason() or ("its reason, if it gave one, was lost with the link: its own failsafe (GCS, battery, "
+                                "EKF), another ground station or the pilot" if t.unheard > 0 else
+                                "no reason given: another ground station, the pilot's mode switch or a script")
+        when = f" while the console could not hear it ({t.unheard:.1f} s)" if t.unheard > 0 else ""
+        return f"vehicle took control: mode {t.mode}{when} ({why})"
 
     def take_control(self) -> None:
         """The operator takes control again: the console may command modes and targets."""

@@ -17,7 +17,7 @@ control (``ArduCopter/mode_guided.cpp``): ``controller_changes`` counts the entr
 control so the speed can be sent again after each.
 
 Also here: modes by name (``MAV_CMD_DO_SET_MODE`` with Copter custom mode numbers), arming,
-take-off (``MAV_CMD_NAV_TAKEOFF``, altitude above the local origin in ``param7``), speeds
+take-off (``MAV_CMD_NAV_TAKEOFF``, altitude above home in ``param7``), speeds
 (``MAV_CMD_DO_CHANGE_SPEED``) and ``SET_POSITION_TARGET_LOCAL_NED`` targets (world frame in,
 ``MAV_FRAME_LOCAL_NED`` out).
 """
@@ -243,7 +243,9 @@ class Commander:
                      cancel=cancel)
 
     def takeoff(self, altitude: float, climbing: Callable[[], bool], cancel: threading.Event | None = None) -> None:
-        """MAV_CMD_NAV_TAKEOFF to ``altitude`` [m] above the local origin."""
+        """MAV_CMD_NAV_TAKEOFF to ``altitude`` [m] above home (where the vehicle armed: ArduCopter reads
+        param7 in MAV_FRAME_GLOBAL_RELATIVE_ALT, takeoff.cpp); refused (FAILED) unless GUIDED, armed, landed
+        and above the vehicle's own height."""
         mav = mavutil().mavlink
         if not math.isfinite(altitude):
             raise LinkError(f"take-off altitude must be finite, got {altitude}")

@@ -53,6 +53,12 @@ STILL_DWELL = 0.3
 YAW_TOLERANCE = math.radians(5.0)
 """How close [rad] the vehicle's heading (ATTITUDE yaw) must come to a turn's heading."""
 
+PROGRESS_WINDOW = 2.0
+"""Window [s] over which the measured closing speed towards a waypoint is taken (motion time-outs)."""
+
+MIN_CLOSING_SPEED = 0.05
+"""Below this closing speed [m/s] a vehicle past its motion time-out counts as not progressing."""
+
 TURN_RATE_EXPECTED = math.radians(30.0)
 """The slowest yaw rate [rad/s] a turn's time-out allows for (ArduCopter's ATC_RATE_Y_MAX is
 higher; ground robots may be slower)."""
@@ -81,6 +87,7 @@ class SegmentExecutor:
     def execute(self, run: SegmentRun, cancel: threading.Event) -> None:
         """Run ``run``'s segment to its end (the segment thread's target): finishes the run DONE or
         FAILED with the reason; a ``cancel`` (hold / abort) leaves finishing it to the caller."""
+        self.telemetry.clear_warning("slow")  # said again if this segment's vehicle is slow too
         try:
             {SegmentKind.WALK: self._do_walk, SegmentKind.TAKEOFF: self._do_takeoff, SegmentKind.FLY: self._do_fly,
              SegmentKind.LAND: self._do_land, SegmentKind.TURN: self._do_turn}[run.segment.kind](run, cancel)
@@ -128,11 +135,19 @@ class SegmentExecutor:
         return t
 
     def _wait(self, done: Callable[[np.ndarray], bool], timeout: float, what: str, cancel: threading.Event,
-              each: Callable[[np.ndarray], None] | None = None) -> None:
+              each: Callable[[np.ndarray], None] | None = None,
+              remaining: Callable[[np.ndarray], float] | None = None, commanded: float | None = None) -> None:
         """Poll ``done(position)`` at the set-point rate (calling ``each(position)`` first) until true
-        or time-out; while the position is invalid or stale nothing is sent or decided."""
+        or time-out; while the position is invalid or stale nothing is sent or decided.
+
+        With ``remaining`` (distance left [m]) the time-out follows the speed the vehicle really flies
+        (LOCAL_POSITION_NED): when it passes while the vehicle still closes in (a vehicle flying its own,
+        slower speed: a refused or lost MAV_CMD_DO_CHANGE_SPEED), it moves to the time the rest takes at
+        the measured closing speed (x ``timeout_factor`` + ``timeout_slack``), with a warning naming both
+        speeds; a vehicle that stopped closing in times out."""
         period = 1.0 / self.config.setpoint_rate
         deadline = time.monotonic() + timeout
+        track: list[tuple[float, float]] = []  # (monotonic [s], remaining [m]) of the last PROGRESS_WINDOW
         while True:
             if cancel.is_set():
                 raise Stopped()
@@ -147,9 +162,31 @@ class SegmentExecutor:
                     each(here)
                 if done(here):
                     return
+                if remaining is not None:
+                    now = time.monotonic()
+                    track.append((now, remaining(here)))
+                    while len(track) > 2 and now - track[1][0] >= PROGRESS_WINDOW:
+                        track.pop(0)
             if time.monotonic() > deadline:
-                raise LinkTimeout(f"{what} not reached within {timeout:.0f} s")
+                later = self._slower_deadline(track, what, commanded)
+                if later is None:
+                    raise LinkTimeout(f"{what} not reached within {timeout:.0f} s")
+                deadline = later
             cancel.wait(period)
+
+    def _slower_deadline(self, track: list[tuple[float, float]], what: str, commanded: float | None) -> float | None:
+        """A new deadline from the measured closing speed over the last window, or None (no progress)."""
+        if len(track) < 2 or track[-1][0] - track[0][0] < 0.5 * PROGRESS_WINDOW:
+            return None
+        (t0, d0), (t1, d1) = track[0], track[-1]
+        closing = (d0 - d1) / (t1 - t0)
+        if closing < MIN_CLOSING_SPEED:
+            return None
+        cfg = self.config
+        if commanded is not None:
+            self.telemetry.warn("slow", f"{what}: the vehicle flies at {closing:.2f} m/s, {commanded:.2f} m/s was "
+                                        "commanded: its time-out follows the measured speed")
+        return time.monotonic() + d1 / closing * max(cfg.timeout_factor, 1.0) + cfg.timeout_slack
 
     def _speeds(self, ground: bool, cancel: threading.Event) -> None:
         """Velocity targets carry their speed (sent here too); position targets get theirs once position
@@ -204,7 +241,7 @@ class SegmentExecutor:
 
         what = f"{'walk' if ground else 'flight'} waypoint {index} ({target[0]:.2f}, {target[1]:.2f}, {target[2]:.2f})"
         timeout = self._motion_timeout(dist0, speed) + (cfg.settle_timeout if stop else 0.0)
-        self._wait(reached, timeout, what, cancel, send)
+        self._wait(reached, timeout, what, cancel, send, remaining=remaining, commanded=speed)
         if ground and cfg.ground.command == "velocity":
             self.commander.send_velocity_target((0.0, 0.0, 0.0), None, comp)
 
@@ -264,18 +301,24 @@ class SegmentExecutor:
         if gap > max(0.5, 3 * cfg.position_tolerance):
             raise LinkError(f"take-off spot ({spot[0]:.2f}, {spot[1]:.2f}) is {gap:.2f} m from the vehicle")
         self.commander.set_mode(cfg.flight_mode, cancel)
-        if not self.commander.armed():
+        armed_here = not self.commander.armed()
+        if armed_here:
             self.commander.arm(cancel)
         self._speeds(False, cancel)
-        floor_down = -cfg.ned.altitude(cfg.floor)
+        ground_down = -cfg.ned.altitude(float(here[2]))  # where it stands (a box top is above the floor)
 
         def climbing() -> bool:
             with self.telemetry.lock:
                 v = self.telemetry.v
-                rising = v.pos_ned is not None and v.pos_ned[2] < floor_down - 0.05
+                rising = v.pos_ned is not None and v.pos_ned[2] < ground_down - 0.05
                 return rising or v.landed_state in (LANDED_TAKEOFF, LANDED_IN_AIR)
 
-        self.commander.takeoff(cfg.ned.altitude(float(top[2])), climbing, cancel)
+        # NAV_TAKEOFF's altitude is above home, where the vehicle last armed (takeoff.cpp do_user_takeoff_U_m;
+        # AP_Arming_Copter::arm), not above the EKF origin: it differs when it armed on a box, say
+        with self.telemetry.lock:  # armed just now: home is here; before: where its heartbeat first said armed
+            home = None if armed_here else self.telemetry.v.home_ned
+        home_up = -home[2] if home is not None else -ground_down  # home's height above the EKF origin [m]
+        self.commander.takeoff(cfg.ned.altitude(float(top[2])) - home_up, climbing, cancel)
         z0 = float(here[2])
 
         def climbed(p: np.ndarray) -> bool:

@@ -6,7 +6,8 @@ and keeps the latest *valid* vehicle state in the vehicle's local NED frame [m, 
 - **identity**: the vehicle is the first HEARTBEAT whose component is the autopilot's
   (``MAV_COMP_ID_AUTOPILOT1`` by default), whose autopilot type is not ``MAV_AUTOPILOT_INVALID``
   and whose vehicle type is not a peripheral (gimbal, camera, GCS ...). Telemetry and COMMAND_ACK
-  are taken from that (system, component) only; the other components are listed; a vehicle using
+  are taken from that (system, component) only, and a COMMAND_ACK only when addressed to the console
+  (its ``target_system`` / ``target_component``: ArduPilot answers each sender); the other components are listed; a vehicle using
   the console's own system id, and a second vehicle on the port, are warned about;
 - **validation**: every field used is checked finite and plausible; an invalid message is dropped
   whole and counted per message type with the reason (``LOCAL_POSITION_NED.x: not finite``), so
@@ -123,6 +124,7 @@ class Vehicle:
     low_boot_ms: int | None = None  # a candidate earlier clock (reboot or late copies)
     low_count: int = 0
     silence_end: float = -math.inf  # monotonic [s] a heartbeat silence ended
+    silence_end_prev: float = -math.inf  # monotonic [s] of the last heartbeat before that silence
     last_rx: float = -math.inf  # monotonic [s] of the vehicle's last message of any kind
     origin: tuple[float, float, float] | None = None  # first GPS_GLOBAL_ORIGIN (lat deg, lon deg, alt m)
     origin_now: tuple[float, float, float] | None = None
@@ -137,6 +139,8 @@ class Vehicle:
     epoch: int = 0
     epoch_reason: str = ""
     params: dict[str, float] = field(default_factory=dict)
+    foreign_acks: int = 0  # COMMAND_ACKs addressed to another ground station / component (ignored)
+    home_ned: Vec3 | None = None  # where the vehicle was when it last armed (its home, NED)
 
     @property
     def armed(self) -> bool:
@@ -154,12 +158,14 @@ class Telemetry:
         max_speed: Largest plausible speed component [m/s].
         on_epoch: Called (outside the lock) with the reason after a reboot / reconnect.
         vehicle_max_speed: Fastest the vehicle really moves [m/s] (faster position steps are jumps).
+        source_component: The console's own component id (COMMAND_ACKs for other ids are not ours).
     """
 
     def __init__(self, source_system: int, heartbeat_timeout: float, autopilot_component: int | None = 1,
                  max_range: float = 10_000.0, max_speed: float = 50.0,
-                 on_epoch: Callable[[str], None] | None = None, vehicle_max_speed: float = 15.0) -> None:
-        self.source_system = source_system
+                 on_epoch: Callable[[str], None] | None = None, vehicle_max_speed: float = 15.0,
+                 source_component: int = 190) -> None:
+        self.source_system, self.source_component = source_system, source_component
         self.heartbeat_timeout = heartbeat_timeout
         self.autopilot_component = autopilot_component
         self.max_range, self.max_speed = max_range, max_speed
@@ -225,15 +231,19 @@ class Telemetry:
         if v.last_heartbeat > -math.inf and now - v.last_heartbeat > self.heartbeat_timeout:
             reason = f"heartbeat back after {now - v.last_heartbeat:.1f} s of silence"
             v.silence_end = now
+            v.silence_end_prev = v.last_heartbeat  # the last heartbeat before the silence
         v.last_heartbeat = now
         v.custom_mode = int(msg.custom_mode)
         from pymavlink import mavutil  # on first use, as console.link.mavlink_transport.mavutil()
         name = mavutil.mode_mapping_acm.get(v.custom_mode, f"mode {v.custom_mode}")
-        if self.authority.observe(name) is not None:
+        if self.authority.observe(name, now - v.silence_end_prev if reason else 0.0) is not None:
             self._add_line(4, f"WARNING: link: the vehicle switched to {name} by itself: the console "
                               "sends nothing until the operator takes control")
+        was_armed = v.armed
         v.base_mode = int(msg.base_mode)
         v.system_status = int(msg.system_status)
+        if v.armed and not was_armed:  # ArduPilot sets home where it arms (AP_Arming_Copter::arm)
+            v.home_ned = v.pos_ned
         return reason
 
     # --- receiving -------------------------------------------------------------------------------
@@ -378,7 +388,8 @@ class Telemetry:
         elif kind == "TIMESYNC":
             self.quality.timesync(msg, self.timesync_sent)
         elif kind == "COMMAND_ACK":
-            self.acks[int(msg.command)] = (msg, now)
+            if self._ack_for_us(msg):
+                self.acks[int(msg.command)] = (msg, now)
         elif kind == "PARAM_VALUE":
             name = msg.param_id.decode(errors="replace") if isinstance(msg.param_id, bytes) else str(msg.param_id)
             if math.isfinite(float(msg.param_value)):
@@ -390,6 +401,15 @@ class Telemetry:
             else:
                 self._origin((lat, lon, alt))
         return epoch
+
+    def _ack_for_us(self, msg: Any) -> bool:
+        """ArduPilot addresses each COMMAND_ACK to the command's sender (GCS_Common.cpp handle_command_long):
+        one for a second ground station or a companion is not ours (target 0 / MAVLink 1: anyone's)."""
+        to_sys, to_comp = int(getattr(msg, "target_system", 0) or 0), int(getattr(msg, "target_component", 0) or 0)
+        if to_sys in (0, self.source_system) and to_comp in (0, self.source_component):
+            return True
+        self.v.foreign_acks += 1
+        return False
 
     def _estimator_flags(self, fault: str) -> None:
         if self.v.pos_ned is None and not self.v.armed:

@@ -35,8 +35,9 @@ log = logging.getLogger(__name__)
 
 _URL_RE = re.compile(r"^(udpin|udpout|udp|udpbcast|tcp|tcpin):([^:]+):(\d+)$")
 
-FAILSAFE_PARAMS = ("FS_GCS_ENABLE", "FS_GCS_TIMEOUT", "FS_EKF_ACTION")
-"""ArduPilot Copter failsafe parameters read at connect."""
+FAILSAFE_PARAMS = ("FS_GCS_ENABLE", "FS_GCS_TIMEOUT", "FS_EKF_ACTION", "SYSID_MYGCS", "MAV_GCS_SYSID")
+"""ArduPilot Copter failsafe parameters read at connect; the GCS failsafe counts only heartbeats from system
+``SYSID_MYGCS`` (``MAV_GCS_SYSID`` from ArduPilot 4.7; ArduCopter GCS_Mavlink.cpp / events.cpp)."""
 
 ASKS = 5
 """How often the EKF origin and the failsafe parameters are asked for (per connection / reboot): an
@@ -426,6 +427,22 @@ class StreamKeeper:
                                     "is lost only the console's commands (if they get through) stop the vehicle")
         elif fs is not None:
             self.tel.clear_warning("fs_gcs")
+        self._check_gcs_id(fs)
+
+    def _check_gcs_id(self, fs: float | None) -> None:
+        """The vehicle's GCS failsafe ignores heartbeats from a system id other than its SYSID_MYGCS: with
+        another id the console's link looks fine while the vehicle counts down to its failsafe."""
+        with self.tel.lock:
+            params = self.tel.v.params
+            gcs_id = params.get("MAV_GCS_SYSID", params.get("SYSID_MYGCS"))
+        ours = self.transport.source_system
+        if gcs_id is not None and int(gcs_id) != ours and fs != 0:
+            self.tel.warn("gcs_sysid", f"the vehicle's SYSID_MYGCS (MAV_GCS_SYSID) is {int(gcs_id)}, the console is "
+                                       f"system {ours}: the vehicle does not count the console's heartbeats, so "
+                                       "its GCS failsafe triggers although the link works: set the parameter to "
+                                       f"{ours}")
+        elif gcs_id is not None:
+            self.tel.clear_warning("gcs_sysid")
 
 
 __all__ = ["MavTransport", "StreamKeeper", "parse_connection", "tlog_path", "FAILSAFE_PARAMS"]
