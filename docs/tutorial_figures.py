@@ -50,7 +50,9 @@ class Tour:
         self.log.append(f"----- page text after {step} -----\n{self.page.inner_text('body')}\n-----")
 
     def notices(self) -> list[str]:
-        return [n.inner_text().replace("\n", " | ") for n in self.page.locator(NOTES).all()]
+        """The notices on the page now, read in one go (one may slide out between two reads)."""
+        texts = self.page.evaluate(f"() => [...document.querySelectorAll('{NOTES}')].map(n => n.innerText)")
+        return [str(t).replace("\n", " | ") for t in texts]
 
     def close_notices(self) -> None:
         for b in self.page.locator(f"{NOTES} button.mantine-Notification-closeButton").all():
