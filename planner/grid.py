@@ -462,20 +462,19 @@ def build_grid(
     closed_unknown = unknown_cells if rule == "closed" else np.zeros(ws.shape, dtype=bool)
     cell_obst = unl | surface | beneath | closed_unknown
     reason = np.zeros(ws.shape, dtype=np.uint8)
-    danger = np.zeros(ws.shape, dtype=bool)
-    axes = ws.axes()
-    reach_w = rb.radius + danger_band
-    # air layers: the flying body (a sphere of the flying radius and the body's height above the cell)
-    pads = margins(objs)
-    g3 = flight_gaps(objs, axes, rb, danger_band, pads)
-    reason[(g3 <= 1e-9) | flight_dilate(cell_obst, rb, res)] = Closed.CLEARANCE
-    danger |= (g3 <= danger_band + 1e-9) | flight_dilate(cell_obst, rb, res, danger_band)
+    danger, axes, reach_w = np.zeros(ws.shape, dtype=bool), ws.axes(), rb.radius + danger_band
+    # air: the flying body; objects close within their mapping margin, the danger band ends as from the mapped box
+    pads, band = margins(objs), [0.0] * len(objs)
+    reason[(flight_gaps(objs, axes, rb, 0.0, pads) <= 1e-9) | flight_dilate(cell_obst, rb, res)] = Closed.CLEARANCE
+    danger |= (flight_gaps(objs, axes, rb, danger_band, band) <= danger_band + 1e-9) | \
+        flight_dilate(cell_obst, rb, res, danger_band)
     # ground layer: the walking cylinder
-    kh = max(1, min(ws.shape[2], int(math.ceil(rb.height / res - 1e-9))))
-    d2, _ = object_distances(objs, axes, reach_w, z_band=(ws.floor, ws.floor + rb.height), pads=pads)
+    kh, z_band = max(1, min(ws.shape[2], int(math.ceil(rb.height / res - 1e-9)))), (ws.floor, ws.floor + rb.height)
+    d2, _ = object_distances(objs, axes, rb.radius, z_band=z_band, pads=pads)
     col = cell_obst[:, :, :kh].any(axis=2)
     ground = (d2 <= rb.radius + 1e-9) | dilate(col, rb.radius, res)
     reason[:, :, 0] = np.where(ground, Closed.CLEARANCE, Closed.OPEN)
+    d2, _ = object_distances(objs, axes, reach_w, z_band=z_band, pads=band)
     danger[:, :, 0] = (d2 <= reach_w + 1e-9) | dilate(col, reach_w, res)
     # what the cell (for the ground layer: its walking column) itself holds wins over clearance
     for mask, why in ((closed_unknown, Closed.UNKNOWN), (beneath, Closed.BENEATH), (surface, Closed.SURFACE),

@@ -5,7 +5,8 @@ check, own cells, viewpoints, the workspace's edge: :func:`planner.cspace.edge_c
 Frames and units: world frame (z up), metres, radians. The robot walking is a vertical cylinder
 of :attr:`RobotModel.radius` around its origin from the floor up to :attr:`RobotModel.height`; in
 the air it is a sphere of :attr:`RobotModel.flying_radius` around its origin (the propellers'
-disc with a safety margin, taken round for simplicity: conservative above and below).
+disc with a safety margin, taken round for simplicity) and the vertical cylinder of that radius
+from the origin up to :attr:`RobotModel.height` (the body above it: :mod:`planner.flight_body`).
 
 MorphoGear's defaults (:data:`MORPHOGEAR`). The paper (``morphonavi-paper.tex``, "MorphoGear:
 Aerial-Ground Robot") names the robot, its hardware and its camera but gives **no dimensions**; the
@@ -39,7 +40,8 @@ class RobotModel:
     Attributes:
         radius: Footprint radius when walking [m]: no walking route passes closer to an obstacle.
         height: Height of the walking body [m]: the space up to it over a walked cell must be free.
-        flying_radius: Radius in the air [m]: no flight passes closer to an obstacle.
+        flying_radius: Radius in the air [m]: no flight passes closer to an obstacle (the body's
+            ``height`` above the origin is kept clear too).
         camera_height: Camera height above the floor when standing [m] (viewpoints).
         camera_half_vfov: Half the camera's vertical field of view [rad] (viewpoints).
     """
