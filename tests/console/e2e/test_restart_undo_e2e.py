@@ -13,6 +13,7 @@ missing. Screenshots go to the test's folder.
 from __future__ import annotations
 
 import tempfile
+import warnings
 from pathlib import Path
 from typing import Any
 
@@ -38,11 +39,22 @@ def _start(tmp: Path) -> ConsoleApp:
 
 def _open(ctx: Any, app: ConsoleApp) -> Any:
     page = ctx.new_page()
-    page.goto(app.url)
+    page.goto(app.url, timeout=LONG)
     page.get_by_role("button", name="Add goal").wait_for(timeout=LONG)
     assert app.server is not None
     wait_for(lambda: len(app.server.get_clients()) >= 1, "the page connected")
     return page
+
+
+def _shot(page: Any, path: Path) -> None:
+    """A screenshot for the reader, never the test's verdict: a page drawing a frame every few seconds under
+    load may not give one within the (generous) time; the test goes on without it."""
+    from playwright.sync_api import TimeoutError as PlaywrightTimeout
+
+    try:
+        page.screenshot(path=str(path), timeout=LONG)
+    except PlaywrightTimeout:
+        warnings.warn(f"no screenshot {path.name} within {LONG / 1000:.0f} s (a loaded machine)", stacklevel=2)
 
 
 def _ids(app: ConsoleApp) -> set[str]:
@@ -59,7 +71,7 @@ def test_undo_after_a_restart_is_enabled_with_its_step_and_puts_the_map_back(tmp
     with sync_playwright() as pw:
         ctx = pw.chromium.launch_persistent_context(
             tempfile.mkdtemp(prefix="chromium-", dir=tmp_path), executable_path=str(CHROMIUM), headless=True,
-            args=BROWSER_ARGS, viewport={"width": VIEWPORT[0], "height": VIEWPORT[1]})
+            args=BROWSER_ARGS, viewport={"width": VIEWPORT[0], "height": VIEWPORT[1]}, timeout=LONG)
         try:
             # --- first run: the map, and a delete made in the page ------------------------------------------
             app = _start(tmp_path)
@@ -87,7 +99,7 @@ def test_undo_after_a_restart_is_enabled_with_its_step_and_puts_the_map_back(tmp
                 undo = page.get_by_role("button", name="Undo delete crate-b", exact=True)
                 expect(undo).to_be_enabled(timeout=LONG)  # before the fix: a bare "Undo", disabled
                 expect(page.get_by_role("button", name="Redo", exact=True)).to_be_disabled(timeout=LONG)
-                page.screenshot(path=str(shots / "restart-undo-1440x900.png"))
+                _shot(page, shots / "restart-undo-1440x900.png")
                 click_until(button(page, "Undo delete crate-b"), lambda: "crate-b" in _ids(again),
                             "the Undo after the restart")
                 assert _ids(again) == {"crate-a", "crate-b"}  # the map as it was before the delete
@@ -97,7 +109,7 @@ def test_undo_after_a_restart_is_enabled_with_its_step_and_puts_the_map_back(tmp
                 click_until(button(page, "Redo delete crate-b"), lambda: "crate-b" not in _ids(again),
                             "the Redo after the restart")
                 expect(page.get_by_role("button", name="Undo delete crate-b", exact=True)).to_be_enabled(timeout=LONG)
-                page.screenshot(path=str(shots / "restart-redo-1440x900.png"))
+                _shot(page, shots / "restart-redo-1440x900.png")
             finally:
                 again.stop()
         finally:
