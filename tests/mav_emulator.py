@@ -159,6 +159,8 @@ class ArduCopterEmulator(CopterPhysics, VehicleEvents, VehicleCommands):
         self.duplicate_delay = 0.0  # [s] every packet also arrives this late (a second telemetry link)
         self.signing_passphrase: str | None = None  # signing required with this key (GCS_Signing.cpp)
         self.ekf_fault_until = 0.0  # monotonic [s]: EKF_STATUS_REPORT reports a glitch until then
+        self.origin_set = True  # False: no EKF origin yet (GPS_GLOBAL_ORIGIN requests ACCEPTED, never answered)
+        self.position_bad = False  # the EKF failsafe's: the position is not trusted (position modes refused)
         self.physics_step = PHYSICS_STEP
         self.after_heartbeat: Any = None  # called (no arguments) right after each autopilot heartbeat is sent
         self.params = {"FS_GCS_ENABLE": 1.0, "FS_GCS_TIMEOUT": 5.0, "FS_EKF_ACTION": 1.0, "RTL_ALT": 1500.0,

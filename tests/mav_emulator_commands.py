@@ -106,7 +106,7 @@ class VehicleCommands:
             if name in self.gcs_blocked_modes:
                 self._mode_failed(name, "GCS entry disabled (FLTMODE_GCSBLOCK)")
                 return self._ack(cmd, mav.MAV_RESULT_FAILED, conf)
-            if self.armed and name in NEEDS_POSITION and not self.ekf_ready:
+            if self.armed and name in NEEDS_POSITION and (not self.ekf_ready or self.position_bad):
                 self._mode_failed(name, "requires position")
                 return self._ack(cmd, mav.MAV_RESULT_FAILED, conf)
             self._enter_mode(name)
@@ -178,7 +178,7 @@ class VehicleCommands:
 
     def _request_message(self, m: Any, cmd: int, conf: int) -> None:
         self._ack(cmd, mav.MAV_RESULT_ACCEPTED, conf)
-        if int(m.param1) == mav.MAVLINK_MSG_ID_GPS_GLOBAL_ORIGIN:
+        if int(m.param1) == mav.MAVLINK_MSG_ID_GPS_GLOBAL_ORIGIN and self.origin_set:  # none before it is set
             lat, lon, alt = self.origin
             self._send("gps_global_origin_send", int(lat * 1e7), int(lon * 1e7), int(alt * 1000))
 

@@ -27,6 +27,7 @@ from typing import Any
 
 from pymavlink import mavutil
 
+from mav_emulator_commands import NEEDS_POSITION
 from mav_emulator_physics import RETURNING
 
 mav = mavutil.mavlink
@@ -95,6 +96,24 @@ class VehicleEvents:
         elif not late and self.failsafe_gcs:
             self.failsafe_gcs = False
             self.say("GCS Failsafe Cleared", mav.MAV_SEVERITY_CRITICAL)
+
+    def ekf_variance_bad(self) -> None:
+        """The EKF's variances rise (EKF_STATUS_REPORT bad, the position no longer trusted: modes needing it
+        refused); ekf_check.cpp acts only after EKF_CHECK_ITERATIONS_MAX checks (:meth:`ekf_failsafe`)."""
+        with self.lock:
+            self.ekf_fault_until = time.monotonic() + 3600.0
+            self.position_bad = True
+
+    def ekf_failsafe(self) -> None:
+        """ekf_check.cpp: variances over FS_EKF_THRESH for long enough: "EKF variance" (CRITICAL), then
+        failsafe_ekf_event: armed in a mode that needs a position (or FS_EKF_ACTION 3), LAND (FS_EKF_ACTION
+        1, 3) or ALT_HOLD (2)."""
+        with self.lock:
+            self.ekf_variance_bad()
+            self.say("EKF variance", mav.MAV_SEVERITY_CRITICAL)
+            action = int(self.params.get("FS_EKF_ACTION", 1))
+            if self.armed and (self.mode in NEEDS_POSITION or action == 3):
+                self._enter_mode("ALT_HOLD" if action == 2 else "LAND", by="ekf failsafe")
 
     def fence_breach(self) -> None:
         """A fence breach with FENCE_ACTION brake: BRAKE, with its STATUSTEXT."""

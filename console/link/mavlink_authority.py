@@ -32,6 +32,12 @@ RECENT_COMMAND = 10.0
 """A mode the console commanded this recently [s] (even unacknowledged) is the console's own when it shows up."""
 
 
+def _answer_to_us(text: str) -> bool:
+    """A line answering one of the console's commands (mode.cpp ``Mode change to BRAKE failed: ...``, arming
+    checks): never the reason for a mode the vehicle chose."""
+    return text.split(": ", 1)[-1].startswith(("Mode change to ", "PreArm:", "Arm:"))
+
+
 class VehicleInControl(LinkError):
     """The vehicle is in a mode the console did not command: nothing is sent until the operator takes control."""
 
@@ -102,7 +108,7 @@ class ModeAuthority:
             return ""
         lines = [(at, text) for at, sev, text in self.reasons()
                  if sev <= 4 and t.time - 5.0 <= at <= t.time + (5.0 if t.unheard else 2.0)
-                 and not text.startswith("WARNING: link:")]
+                 and not text.startswith("WARNING: link:") and not _answer_to_us(text)]
         before = [x for x in lines if x[0] <= t.time]
         pick = before[-1] if before else (lines[0] if lines else None)
         text = pick[1].split(": ", 1)[-1] if pick else ""

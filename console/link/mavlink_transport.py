@@ -410,6 +410,12 @@ class StreamKeeper:
             missing = [p for p in FAILSAFE_PARAMS if p not in self.tel.v.params]
         if have_origin:
             self.want_origin = False
+            self.tel.clear_warning("origin_unset")
+        elif self._asks["origin"] >= ASKS and now - self._origin_asked > self.retry_period:
+            # GCS_Common.cpp: REQUEST_MESSAGE is ACCEPTED, but GPS_GLOBAL_ORIGIN is sent only once the origin is set
+            self.tel.warn("origin_unset", f"the vehicle reports no EKF origin (GPS_GLOBAL_ORIGIN asked {ASKS} times, "
+                                          "never sent): ArduPilot sets it with a GPS fix or SET_GPS_GLOBAL_ORIGIN; "
+                                          "until then a moved origin cannot be detected")
         if self.want_origin and now - self._origin_asked > self.retry_period and self._asks["origin"] < ASKS:
             self._origin_asked = now
             self._asks["origin"] += 1

@@ -234,3 +234,74 @@ def test_a_radio_outage_the_vehicle_answers_with_its_gcs_failsafe_is_never_resum
         assert eventually(lambda: emu.landed_state == mav.MAV_LANDED_STATE_ON_GROUND, 90.0)
         modes = [m for (m, t), (_, by) in zip(emu.record.mode_times, emu.record.mode_sources) if t > back]
         assert modes == [] and emu.mode == "RTL", modes  # the vehicle's RTL ran to its end, untouched
+
+
+def test_an_ekf_failsafe_landing_is_left_to_the_vehicle() -> None:
+    """ekf_check.cpp: EKF_STATUS_REPORT bad, then "EKF variance" and LAND (FS_EKF_ACTION 1). The console's
+    own estimator check fires first; its hold is refused by a vehicle without a trusted position, and
+    that refusal is not the vehicle's reason for its LAND: the console names "EKF variance", sends
+    nothing more, and the vehicle lands where its failsafe put it."""
+    from mav_helpers import events, mission_manager
+    from console.link.manager import MissionStatus
+    from planner.mission import Mission
+
+    with vehicle(config(fly_speed=1.0), descent_rate=1.0) as (link, emu):
+        run = link.run_segment(MissionSegment(SegmentKind.TAKEOFF, ((2.5, 0.7, 0.0), (2.5, 0.7, 1.5))))
+        assert run.wait(60.0) is RunStatus.DONE, run.error
+        manager = mission_manager(link, failsafe_after=1.5, failsafe_hold=0.5)
+        manager.start(Mission((MissionSegment(SegmentKind.FLY, ((2.5, 0.7, 1.5), (2.5, 9.0, 1.5))),),
+                              bounds_min=(0.0, 0.0, 0.0), bounds_max=(10.0, 12.0, 3.0)))
+        assert eventually(lambda: emu.pos[0] > 1.0, 30.0)
+        took = time.monotonic()
+        emu.ekf_variance_bad()  # the flags first: the console holds (BRAKE: refused, "requires position")
+        assert manager.wait(30.0) is MissionStatus.PAUSED, events(manager)
+        assert eventually(lambda: any("Mode change to BRAKE failed: requires position" in m for m in events(manager)),
+                          30.0), events(manager)
+        emu.ekf_failsafe()  # then the vehicle's own EKF failsafe: LAND
+        assert eventually(lambda: "vehicle took control: mode LAND (EKF variance)" in link.vehicle_control, 30.0), \
+            link.vehicle_control
+        assert eventually(lambda: emu.landed_state == mav.MAV_LANDED_STATE_ON_GROUND, 60.0)
+        console_modes = [m for (m, t), (_, by) in zip(emu.record.mode_times, emu.record.mode_sources)
+                         if t > took and by == "gcs"]
+        assert console_modes == [] and emu.mode == "LAND", (console_modes, emu.mode, events(manager))
+
+
+def test_the_reason_for_a_takeover_is_the_vehicles_not_its_answer_to_our_command() -> None:
+    """The console's hold raced the vehicle's EKF failsafe: mode.cpp's refusal of our BRAKE came after
+    the vehicle's "EKF variance" and before the LAND heartbeat; the reason is "EKF variance". A takeover
+    first seen in the heartbeat ending a silence says so, and a failsafe's "... Cleared" names it."""
+    from console.link.mavlink_authority import ModeAuthority
+
+    lines: list[tuple[float, int, str]] = []
+    a = ModeAuthority(lambda: lines)
+    a.commanding("GUIDED")
+    a.commanded("GUIDED", True)
+    assert a.observe("GUIDED") is None
+    now = time.monotonic()
+    lines.append((now - 0.3, 2, "CRITICAL: EKF variance"))
+    lines.append((now - 0.1, 4, "WARNING: Mode change to BRAKE failed: requires position"))
+    assert a.observe("LAND") is not None
+    assert a.describe() == "vehicle took control: mode LAND (EKF variance)"
+    a.take_control()
+    lines.clear()
+    a.commanding("GUIDED")
+    a.commanded("GUIDED", True)
+    assert a.observe("GUIDED") is None
+    assert a.observe("RTL", unheard=7.5) is not None
+    assert a.describe().startswith("vehicle took control: mode RTL while the console could not hear it (7.5 s) "
+                                   "(its reason, if it gave one, was lost with the link")
+    lines.append((time.monotonic() + 1.0, 2, "CRITICAL: GCS Failsafe Cleared"))
+    assert a.describe() == ("vehicle took control: mode RTL while the console could not hear it (7.5 s) "
+                            "(GCS Failsafe (now cleared))")
+
+
+def test_a_vehicle_without_an_ekf_origin_is_said_to_have_none() -> None:
+    """GCS_Common.cpp: MAV_CMD_REQUEST_MESSAGE(GPS_GLOBAL_ORIGIN) is ACCEPTED but nothing is sent while the
+    EKF origin is not set (indoors, no GPS): the console says so instead of waiting silently."""
+    with vehicle(faults={"origin_set": False}) as (link, emu):
+        assert eventually(lambda: any("the vehicle reports no EKF origin (GPS_GLOBAL_ORIGIN asked 5 times, never "
+                                      "sent)" in w for w in link.latest_state().warnings), 90.0), \
+            link.latest_state().warnings
+        asked = [c for c in emu.record.commands if c[0] == mav.MAV_CMD_REQUEST_MESSAGE]
+        assert len(asked) >= 5 and all(r == mav.MAV_RESULT_ACCEPTED for _, _, r in asked)
+        assert link.telemetry.v.origin_now is None
