@@ -13,25 +13,12 @@ import math
 
 import pytest
 
-from console.link.sim import SimRobot
 from console.link.world import paper_room
-from console.session.mapping_job import ground_truth_bundle_for
-from pipeline.catalog import default_catalog
-from pipeline.camera.geometry import Pose
-from pipeline.mapper import Mapper
 
 
 @pytest.fixture(scope="module")
-def start_pose_map():
-    robot = SimRobot(start=Pose.from_xyz_yaw(2.5, 0.7, 0.0, math.pi / 2), manual_clock=True)
-    robot.connect()
-    try:
-        shot = robot.capture()
-    finally:
-        robot.close()
-    with Mapper(ground_truth_bundle_for(shot), default_catalog()) as mapper:
-        res = mapper.run(shot.image, shot.intrinsics, shot.mount, shot.robot_pose, capture_id="edge")
-    return res
+def start_pose_map(sim_shot, gt_map):
+    return gt_map(sim_shot(2.5, 0.7, 0.0, 90.0), capture_id="edge")
 
 
 def _error_xy(obj) -> float:

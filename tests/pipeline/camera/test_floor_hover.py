@@ -47,16 +47,13 @@ def test_box_tops_with_the_floor_seen_past_them_are_not_the_floor() -> None:
     assert plane is None or abs(plane.camera_height - H) < 0.05, plane
 
 
-def _hover(world: str | None, x: float, y: float, z: float, yaw_deg: float, pitch_deg: float = 0.0):
+def _hover(sim_shot, gt_map, world: str | None, x: float, y: float, z: float, yaw_deg: float,
+           pitch_deg: float = 0.0):
     """Map one simulator render with the robot hovering at ``(x, y, z)``, the camera mounted at
-    ``pitch_deg`` but told level (ground-truth perception)."""
+    ``pitch_deg`` but told level (ground-truth perception; the fixtures of tests/pipeline/conftest.py)."""
     import json
 
-    from console.link.sim import SimRobot
-    from console.session.mapping_job import ground_truth_bundle_for
-    from pipeline.camera.geometry import CameraMount, Pose
-    from pipeline.catalog import default_catalog
-    from pipeline.mapper import Mapper
+    from pipeline.camera.geometry import CameraMount
     from pipeline.scene_json import scene_from_dict
 
     kw = {}
@@ -64,15 +61,8 @@ def _hover(world: str | None, x: float, y: float, z: float, yaw_deg: float, pitc
         from pathlib import Path
         d = json.loads((Path(__file__).resolve().parents[3] / world).read_text())
         kw = dict(world=scene_from_dict(d["scene"]), room=(d["room"]["min"], d["room"]["max"]))
-    robot = SimRobot(start=Pose.from_xyz_yaw(x, y, z, math.radians(yaw_deg)),
-                     mount=CameraMount(pitch=math.radians(pitch_deg)), manual_clock=True, **kw)
-    robot.connect()
-    try:
-        shot = robot.capture()
-    finally:
-        robot.close()
-    with Mapper(ground_truth_bundle_for(shot), default_catalog()) as mapper:
-        return mapper.run(shot.image, shot.intrinsics, CameraMount(), shot.robot_pose).scene
+    shot = sim_shot(x, y, z, yaw_deg, mount=CameraMount(pitch=math.radians(pitch_deg)), **kw)
+    return gt_map(shot, CameraMount()).scene
 
 
 # (0.12, 0.12, 0.88) facing +y: the search's hover along a wall ("disagrees ... by 6.0 sigma: pitch 11.7 deg,
@@ -84,16 +74,17 @@ HOVER = [(None, 0.12, 0.12, 0.88, 90.0), (None, 2.5, 3.5, 1.0, 90.0), (None, 1.5
 
 
 @pytest.mark.parametrize("world, x, y, z, yaw_deg", HOVER)
-def test_hovering_with_the_exact_pose_gives_no_pose_warning(world, x, y, z, yaw_deg) -> None:
-    scene = _hover(world, x, y, z, yaw_deg)
+def test_hovering_with_the_exact_pose_gives_no_pose_warning(sim_shot, gt_map, world, x, y, z, yaw_deg) -> None:
+    scene = _hover(sim_shot, gt_map, world, x, y, z, yaw_deg)
     (capture,) = scene.captures
     assert "camera_pose_warning" not in capture.models, capture.models["camera_pose_warning"]
     assert "camera pose given" in capture.models["camera_pose"]
 
 
 @pytest.mark.parametrize("world, x, y, z, yaw_deg", [(None, 2.5, 3.5, 1.9, 90.0), (EXAMPLES_OFFICE, 3.0, 0.5, 1.9, 90.0)])
-def test_a_hovering_camera_pitched_10_deg_but_told_level_is_still_named(world, x, y, z, yaw_deg) -> None:
-    scene = _hover(world, x, y, z, yaw_deg, pitch_deg=10.0)
+def test_a_hovering_camera_pitched_10_deg_but_told_level_is_still_named(sim_shot, gt_map, world, x, y, z,
+                                                                         yaw_deg) -> None:
+    scene = _hover(sim_shot, gt_map, world, x, y, z, yaw_deg, pitch_deg=10.0)
     warning = scene.captures[0].models.get("camera_pose_warning")
     assert warning is not None and "disagrees with the given camera pose" in warning
     pitch = float(warning.split(": pitch ")[1].split(" deg")[0])

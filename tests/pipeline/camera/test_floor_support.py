@@ -56,23 +56,12 @@ def test_a_noisy_strip_of_floor_widens_its_own_sigma() -> None:
     assert planes[1.0].sigma_angle > 2.5 * planes[12.0].sigma_angle
 
 
-def _sim_map(x: float, y: float, yaw_deg: float, pitch_deg: float = 0.0):
-    """Map one simulator render at a robot pose, the camera mounted at ``pitch_deg`` but told level."""
-    from console.link.sim import SimRobot
-    from console.session.mapping_job import ground_truth_bundle_for
-    from pipeline.camera.geometry import CameraMount, Pose
-    from pipeline.catalog import default_catalog
-    from pipeline.mapper import Mapper
+def _sim_map(sim_shot, gt_map, x: float, y: float, yaw_deg: float, pitch_deg: float = 0.0):
+    """Map one simulator render at a robot pose, the camera mounted at ``pitch_deg`` but told level
+    (the ``sim_shot`` and ``gt_map`` fixtures of tests/pipeline/conftest.py)."""
+    from pipeline.camera.geometry import CameraMount
 
-    robot = SimRobot(start=Pose.from_xyz_yaw(x, y, 0.0, math.radians(yaw_deg)),
-                     mount=CameraMount(pitch=math.radians(pitch_deg)), manual_clock=True)
-    robot.connect()
-    try:
-        shot = robot.capture()
-    finally:
-        robot.close()
-    with Mapper(ground_truth_bundle_for(shot), default_catalog()) as mapper:
-        return mapper.run(shot.image, shot.intrinsics, CameraMount(), shot.robot_pose).scene
+    return gt_map(sim_shot(x, y, 0.0, yaw_deg, mount=CameraMount(pitch=math.radians(pitch_deg))), CameraMount()).scene
 
 
 # the start pose's look around (the warning was at heading 30 deg) and a wall of boxes 0.7 m ahead
@@ -80,11 +69,11 @@ LOOK = [(2.5, 0.7, 90.0 + 60.0 * i) for i in range(6)] + [(0.8, 5.2, 257.2), (1.
 
 
 @pytest.mark.parametrize("x, y, yaw_deg", LOOK)
-def test_look_around_on_the_simulator_with_the_exact_pose_does_not_cry_wolf(x: float, y: float,
+def test_look_around_on_the_simulator_with_the_exact_pose_does_not_cry_wolf(sim_shot, gt_map, x: float, y: float,
                                                                            yaw_deg: float) -> None:
     from pipeline.camera.pose_check import floor_check
 
-    scene = _sim_map(x, y, yaw_deg)
+    scene = _sim_map(sim_shot, gt_map, x, y, yaw_deg)
     (capture,) = scene.captures
     assert "camera_pose_warning" not in capture.models, capture.models["camera_pose_warning"]
     assert not [w for w in floor_check(scene) if "disagrees" in w]
@@ -92,8 +81,9 @@ def test_look_around_on_the_simulator_with_the_exact_pose_does_not_cry_wolf(x: f
 
 
 @pytest.mark.parametrize("x, y, yaw_deg", [(2.5, 0.7, 90.0), (2.5, 0.7, 270.0), (0.8, 5.2, 257.2)])
-def test_a_camera_pitched_10_deg_but_told_level_is_still_named(x: float, y: float, yaw_deg: float) -> None:
-    scene = _sim_map(x, y, yaw_deg, pitch_deg=10.0)
+def test_a_camera_pitched_10_deg_but_told_level_is_still_named(sim_shot, gt_map, x: float, y: float,
+                                                               yaw_deg: float) -> None:
+    scene = _sim_map(sim_shot, gt_map, x, y, yaw_deg, pitch_deg=10.0)
     warning = scene.captures[0].models.get("camera_pose_warning")
     assert warning is not None and "disagrees with the given camera pose" in warning
     pitch = float(warning.split(": pitch ")[1].split(" deg")[0])

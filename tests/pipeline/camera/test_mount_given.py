@@ -34,25 +34,15 @@ def test_the_camera_readers_say_whether_the_mount_was_given(tmp_path: Path) -> N
     assert cfg.mount_given is True and cfg.mount.pitch == pytest.approx(0.3, abs=1e-6)
 
 
-def test_without_a_given_pose_the_mapper_fits_the_tilted_camera_instead_of_taking_it_level() -> None:
-    from console.link.sim import DEFAULT_MOUNT, SimRobot
-    from console.session.mapping_job import ground_truth_bundle_for
+def test_without_a_given_pose_the_mapper_fits_the_tilted_camera_instead_of_taking_it_level(sim_shot, gt_map) -> None:
+    from console.link.sim import DEFAULT_MOUNT
     from pipeline.camera.geometry import CameraMount
-    from pipeline.catalog import default_catalog
-    from pipeline.mapper import Mapper
 
     high = CameraMount((0.15, 0.0, 1.2), math.radians(30.0))
-    robot = SimRobot(mount=high, manual_clock=True)
-    robot.connect()
-    try:
-        shot = robot.capture()
-    finally:
-        robot.close()
-    catalog = default_catalog()
-    scenes = {}
-    for name, mount, given in (("true", high, True), ("level", DEFAULT_MOUNT, True), ("fitted", DEFAULT_MOUNT, False)):
-        with Mapper(ground_truth_bundle_for(shot), catalog) as mapper:
-            scenes[name] = mapper.run(shot.image, shot.intrinsics, mount, shot.robot_pose, pose_given=given).scene
+    shot = sim_shot(mount=high)
+    scenes = {name: gt_map(shot, mount, pose_given=given).scene
+              for name, mount, given in (("true", high, True), ("level", DEFAULT_MOUNT, True),
+                                         ("fitted", DEFAULT_MOUNT, False))}
     assert floor_check(scenes["level"])  # taken as level: objects off the floor, warned
     assert floor_check(scenes["fitted"]) == []  # fitted from the photo: they stand on the floor
     true = {o.id: np.asarray(o.position) for o in scenes["true"].objects}

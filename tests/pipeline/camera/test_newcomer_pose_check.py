@@ -4,7 +4,6 @@ view, so every box bottom was over the floor)."""
 
 from __future__ import annotations
 
-import math
 
 import pytest
 
@@ -40,24 +39,13 @@ def test_stacked_boxes_under_the_floor_are_still_reported() -> None:
 
 @pytest.mark.parametrize("x, y, z, yaw_deg", [(2.62, 0.62, 1.62, 90.0), (2.625, 0.625, 1.625, 89.5), (1.5, 0.6, 1.6, 80.0)])
 def test_a_capture_hovering_in_front_of_the_line_of_boxes_mapped_with_the_right_pose_is_not_flagged(
-        x: float, y: float, z: float, yaw_deg: float) -> None:
+        sim_shot, gt_map, x: float, y: float, z: float, yaw_deg: float) -> None:
     """The console case: the simulated robot hovering at 1.6 m, 3.4 m before the line, camera level.
 
     (Not yet right: from lower, e.g. 1.1 m, the middle boxes' bottoms hidden behind the desks are
     still taken for floating; the check knows nothing of occlusion.)"""
-    from console.link.sim import DEFAULT_MOUNT, SimRobot
-    from console.session.mapping_job import ground_truth_bundle_for
-    from pipeline.catalog import default_catalog
-    from pipeline.camera.geometry import Pose
-    from pipeline.mapper import Mapper
+    from console.link.sim import DEFAULT_MOUNT
 
-    robot = SimRobot(start=Pose.from_xyz_yaw(x, y, z, math.radians(yaw_deg)), manual_clock=True)
-    robot.connect()
-    try:
-        shot = robot.capture()
-    finally:
-        robot.close()
-    with Mapper(ground_truth_bundle_for(shot), default_catalog()) as mapper:
-        scene = mapper.run(shot.image, shot.intrinsics, DEFAULT_MOUNT, shot.robot_pose).scene
+    scene = gt_map(sim_shot(x, y, z, yaw_deg), DEFAULT_MOUNT).scene
     assert sum(o.label == "cardboard_box" for o in scene.objects) >= 10
     assert floor_check(scene) == []

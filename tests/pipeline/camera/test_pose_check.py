@@ -53,28 +53,16 @@ def test_floor_height_unknown_sizes_and_other_frames() -> None:
     assert floor_check(Scene([_obj(0, "thing", -0.5, known=False), _obj(1, "x", -0.5, frame="camera")])) == []
 
 
-def test_a_photo_from_a_high_tilted_camera_mapped_with_the_level_mount_is_flagged() -> None:
+def test_a_photo_from_a_high_tilted_camera_mapped_with_the_level_mount_is_flagged(sim_shot, gt_map) -> None:
     """The issue's case: taken from 1.2 m looking 30 deg down, mapped as if from the 0.35 m level mount."""
     import math
 
-    from console.link.sim import DEFAULT_MOUNT, SimRobot
-    from console.session.mapping_job import ground_truth_bundle_for
-    from pipeline.catalog import default_catalog
+    from console.link.sim import DEFAULT_MOUNT
     from pipeline.camera.geometry import CameraMount
-    from pipeline.mapper import Mapper
 
     high = CameraMount((0.15, 0.0, 1.2), math.radians(30.0))
-    robot = SimRobot(mount=high, manual_clock=True)
-    robot.connect()
-    try:
-        shot = robot.capture()
-    finally:
-        robot.close()
-    catalog = default_catalog()
-    scenes = {}
-    for name, mount in (("true", high), ("assumed", DEFAULT_MOUNT)):
-        with Mapper(ground_truth_bundle_for(shot), catalog) as mapper:
-            scenes[name] = mapper.run(shot.image, shot.intrinsics, mount, shot.robot_pose).scene
+    shot = sim_shot(mount=high)
+    scenes = {name: gt_map(shot, mount).scene for name, mount in (("true", high), ("assumed", DEFAULT_MOUNT))}
     assert len(scenes["true"].objects) >= 2
     assert floor_check(scenes["true"]) == []  # the right pose: everything on (or over) the floor
     warnings = floor_check(scenes["assumed"])

@@ -6,7 +6,6 @@ placed on that sliver's ray, 1.87 m up, and the map then reported it "floating 0
 
 from __future__ import annotations
 
-import math
 
 import numpy as np
 import pytest
@@ -43,20 +42,8 @@ def test_a_whole_object_or_one_on_the_floor_keeps_its_centre() -> None:
 
 
 @pytest.mark.parametrize("x, y, z, yaw_deg", [(2.5, 0.7, 0.0, 90.0), (2.5, 1.2, 1.0, 90.0)])
-def test_the_cabinet_behind_the_box_line_stands_on_the_floor(x: float, y: float, z: float, yaw_deg: float) -> None:
-    from console.link.sim import SimRobot
-    from console.session.mapping_job import ground_truth_bundle_for
-    from pipeline.camera.geometry import Pose
-    from pipeline.catalog import default_catalog
-    from pipeline.mapper import Mapper
-
-    robot = SimRobot(start=Pose.from_xyz_yaw(x, y, z, math.radians(yaw_deg)), manual_clock=True)
-    robot.connect()
-    try:
-        shot = robot.capture()
-    finally:
-        robot.close()
-    with Mapper(ground_truth_bundle_for(shot), default_catalog()) as mapper:
-        scene = mapper.run(shot.image, shot.intrinsics, robot.mount, shot.robot_pose).scene
+def test_the_cabinet_behind_the_box_line_stands_on_the_floor(sim_shot, gt_map, x: float, y: float, z: float,
+                                                             yaw_deg: float) -> None:
+    scene = gt_map(sim_shot(x, y, z, yaw_deg)).scene
     (cab,) = [o for o in scene.objects if o.label == "office_cabinet"]
     assert abs(cab.position[2] - 0.925) < 0.05, cab.position  # was 1.87 from the start pose
