@@ -5,9 +5,11 @@ session handed to ``plan`` is refused with what it is and which command reads it
 (``session.json is a console session, not a scene: open it with morphonavi console --session DIR``)
 instead of being read as an empty scene.
 
-Kinds (:data:`KINDS`): scene, scene graph (``describe --json``), console session, mission,
-camera file (``camera.toml``), dataset photo JSON (intrinsics ``K`` beside a photo), dataset index,
-simulator world file (``console --world``), bench report, recording (MCAP), object catalog (TOML), photo. A JSON file is recognised from its
+Kinds (:data:`KINDS`): scene, scene graph (``describe --json``), console session, console undo history
+(``history.json``), mission, search result (``search --out``), search benchmark results
+(``bench/search.py --json``), known space, camera file (``camera.toml``), dataset photo JSON (intrinsics ``K``
+beside a photo), dataset index, simulator world file (``console --world``), bench report, JSON Schema
+(``docs/schemas``), recording (MCAP), object catalog (TOML), photo. A JSON file is recognised from its
 keys (:func:`kind_of_json`); other files from their first bytes and suffix (:func:`sniff`).
 
 Every input is size-checked before it is parsed (:func:`read_limited`): the limits and their numbers
@@ -63,8 +65,19 @@ KINDS: dict[str, Kind] = {k.key: k for k in (
     Kind("session", "a console session (written by `morphonavi console`)",
          "open it with `morphonavi console --session DIR` (DIR: the folder holding it); the console's map is "
          "its \"scene\" entry"),
+    Kind("history", "a console undo history (morphonavi-history, written by `morphonavi console` beside "
+                    "session.json)",
+         "the console reads it back with its session: open the folder holding it with "
+         "`morphonavi console --session DIR`"),
     Kind("mission", "a mission (written by `morphonavi plan` or the console)",
          "it is plan's output; give the scene file it was planned on"),
+    Kind("search_result", "a search result (written by `morphonavi search --out`)", "it is search's output"),
+    Kind("search_bench", "a search benchmark's results (written by `bench/search.py --json`)",
+         "it is the benchmark's output"),
+    Kind("known_space", "a known space (morphonavi.known_space)",
+         "give it to `morphonavi plan SCENE --known-space FILE`"),
+    Kind("json_schema", "a JSON Schema (docs/schemas)",
+         "it describes a file kind: check a file against it with `python -m console.schemas --validate KIND FILE`"),
     Kind("camera_toml", "a camera file (camera.toml)",
          "give it to `morphonavi map --camera` or `morphonavi console --camera-file`"),
     Kind("dataset_camera", "a dataset photo's camera JSON (K, width, height beside a photo)",
@@ -86,8 +99,9 @@ class FileKindError(ValueError):
 
 
 def kind_of_json(data: Any) -> str:
-    """The kind key of parsed JSON: ``scene``, ``session``, ``mission``, ``scene_graph``, ``world``,
-    ``dataset_camera``, ``dataset_index``, ``bench_report`` or ``json`` (none of them)."""
+    """The kind key of parsed JSON: ``scene``, ``session``, ``history``, ``mission``, ``scene_graph``,
+    ``search_result``, ``search_bench``, ``known_space``, ``json_schema``, ``world``, ``dataset_camera``,
+    ``dataset_index``, ``bench_report`` or ``json`` (none of them)."""
     if isinstance(data, list):
         if data and all(isinstance(e, dict) and "json" in e for e in data):
             return "dataset_index"
@@ -98,6 +112,16 @@ def kind_of_json(data: Any) -> str:
         return "world"
     if data.get("kind") == "morphonavi-session" or {"workspace", "route", "scene"} <= data.keys():
         return "session"
+    if data.get("kind") == "morphonavi-history":
+        return "history"
+    if data.get("format") == "morphonavi.known_space":
+        return "known_space"
+    if "$schema" in data and ("properties" in data or "$defs" in data):
+        return "json_schema"
+    if {"found", "target", "reason", "steps"} <= data.keys():
+        return "search_result"
+    if {"rows", "records", "config"} <= data.keys():
+        return "search_bench"
     if data.get("schema") == "morphonavi.scene_graph" or {"relations", "groups"} <= data.keys():
         return "scene_graph"
     if "segments" in data and ("bounds" in data or "id" in data):
@@ -227,6 +251,8 @@ def read_json_of_kind(path: str | os.PathLike[str], expected: str, where: str = 
     kind = sniff(p, raw[:4096])
     if kind not in ("json_file", "unknown"):
         raise FileKindError(wrong_kind(where, label, kind, expected))
+    if not raw.strip():
+        raise FileKindError(f"{where}{label}: is empty (0 bytes of JSON): expected {KINDS[expected].what} file")
     try:
         text = raw.decode("utf-8-sig")
     except UnicodeDecodeError:

@@ -81,6 +81,10 @@ def camera_source(args: argparse.Namespace) -> object | None:
 
         if args.captures is not None:
             raise CliError("--camera and --captures: give one camera (a live source or a folder of photos)")
+        if args.camera_file is not None and Path(args.camera_file).is_file():  # empty, binary, another kind
+            from console.cli.input_files import check_input_file
+
+            check_input_file(args.camera_file, "camera_toml", "--camera-file", also=("dataset_camera",))
         try:
             source = open_camera_source(args.camera, args.camera_file)
         except (CameraSourceError, CameraError) as exc:
@@ -239,6 +243,11 @@ def cmd_console(args: argparse.Namespace) -> int:
     from console.cli.console_folders import check_console_folders
 
     check_console_folders(args, DEFAULT_SCENES)  # files given for folders, nested folders: before anything starts
+    if args.captures is not None and Path(args.captures).exists() and not Path(args.captures).is_dir():
+        from console.cli.console_folders import not_a_folder
+
+        raise CliError(not_a_folder("--captures", Path(args.captures), "give a folder of photos, each with its "
+                                    "camera .json beside it", str(Path(args.captures).parent)))
     if args.captures is not None and not Path(args.captures).is_dir():
         raise CliError(f"--captures {args.captures}: no such folder")
     if args.models is not None and not Path(args.models).is_dir():

@@ -15,7 +15,8 @@ from typing import Any
 from console.cli.errors import CliError
 
 
-def _not_a_folder(option: str, path: Path, what: str, example: str) -> str:
+def not_a_folder(option: str, path: Path, what: str, example: str) -> str:
+    """The refusal of a file given where a folder is wanted: what the file is, and ``what`` to give instead."""
     from pipeline.file_kind import KINDS, describe_file
 
     kind = describe_file(path)
@@ -44,7 +45,7 @@ def check_console_folders(args: Any, default_scenes: Path) -> None:
                                ("--scene", scenes, "give the folder the console watches for scene files "
                                                    "(created if missing)")):
         if path.exists() and not path.is_dir():
-            raise CliError(_not_a_folder(option, path, what, str(path.parent / ("session" if option == "--session"
+            raise CliError(not_a_folder(option, path, what, str(path.parent / ("session" if option == "--session"
                                                                                   else "scenes"))))
         for parent in path.parents:  # a file on the way: mkdir would fail with "Not a directory"
             if parent.exists():
@@ -57,4 +58,4 @@ def check_console_folders(args: Any, default_scenes: Path) -> None:
         raise CliError(str(exc)) from None
 
 
-__all__ = ["check_console_folders"]
+__all__ = ["check_console_folders", "not_a_folder"]

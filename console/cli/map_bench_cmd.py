@@ -121,6 +121,10 @@ def _models(args: argparse.Namespace, catalog: Catalog) -> Any:
 
 
 def _catalog(args: argparse.Namespace) -> Catalog:
+    if args.catalog:
+        from console.cli.input_files import check_input_file
+
+        check_input_file(args.catalog, "catalog", "--catalog")
     return Catalog.load(args.catalog) if args.catalog else Catalog.load()
 
 
@@ -134,7 +138,10 @@ def _camera_file(path: Path) -> Any:
     from pipeline.file_kind import MAX_BYTES, describe_file, read_limited, wrong_kind
 
     if Path(path).is_file():
+        from console.cli.input_files import check_input_file
+
         read_limited(path, MAX_BYTES["camera_toml"], "a camera", "--camera")  # size first
+        check_input_file(path, "camera_toml", "--camera", also=("dataset_camera",))
     try:
         return load_camera_toml(path)
     except CameraError:
@@ -155,8 +162,13 @@ def cmd_map(args: argparse.Namespace) -> int:
 
     if args.camera is not None and args.fov is not None:
         raise _UserError("--fov is for photos without a camera file; the camera file's intrinsics are used")
+    from console.cli.input_files import check_input_file
     from console.cli.outputs import check_output
 
+    if Path(args.image).is_file():  # the argument first; another MorphoNavi file is named as what it is
+        check_input_file(args.image, "photo")
+    if args.catalog:
+        check_input_file(args.catalog, "catalog", "--catalog")
     out = check_output(args.out, [("photo", args.image), ("camera file", args.camera), ("catalog", args.catalog)],
                        example="scene.json")
     camera = _camera_file(args.camera) if args.camera is not None else None

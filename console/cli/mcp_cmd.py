@@ -49,6 +49,11 @@ def cmd_mcp(args: argparse.Namespace) -> int:
 
     logging.basicConfig(level=logging.WARNING, stream=sys.stderr, format="morphonavi mcp: %(levelname)s %(message)s")
     session = Path(args.session)
+    if session.exists() and not session.is_dir():
+        from console.cli.console_folders import not_a_folder
+
+        raise CliError(not_a_folder("--session", session, "give the session folder of the running console",
+                                    str(session.parent)))
     if not session.is_dir():
         raise CliError(f"--session {session}: no such folder (start `morphonavi console --session {session}` first)")
     bridge = ConsoleBridge(session, args.allow_actions)

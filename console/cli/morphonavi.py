@@ -65,13 +65,13 @@ def cmd_plan(args: argparse.Namespace) -> int:
     from console.cli.outputs import check_output, write_error
     from pipeline.file_kind import FileKindError, load_scene_file
 
-    out = check_output(args.out, [("scene", args.scene)], example="mission.json")
-    try:
+    try:  # the argument first: its error before any about the default --out
         scene = load_scene_file(args.scene)
     except FileKindError as exc:
         raise CliError(str(exc)) from None
     except SceneError as exc:
         raise CliError(f"{args.scene}: {exc}") from None
+    out = check_output(args.out, [("scene", args.scene)], example="mission.json")
     try:
         ws = Workspace(args.bounds[0], args.bounds[1], args.resolution)
     except GridError as exc:  # the workspace is made of --bounds and --resolution: name them

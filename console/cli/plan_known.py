@@ -37,6 +37,10 @@ def add_known_space_args(p: argparse.ArgumentParser) -> None:
 def _known_from(path: Path, what: str) -> Any:
     from pipeline.mapping.known_space import KnownSpace, KnownSpaceError
 
+    if what != "scene":  # the scene file was read by kind already; --known-space: a known space or a scene
+        from console.cli.input_files import check_input_file
+
+        check_input_file(path, "known_space", what, also=("scene",))
     try:
         data = json.loads(path.read_text(encoding="utf-8-sig"))
     except FileNotFoundError:

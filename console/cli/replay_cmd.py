@@ -40,6 +40,11 @@ def open_replay(path: str | Path | Sequence[str | Path], host: str = "127.0.0.1"
     from console.recording.replay import Recording, ReplayError
     from console.recording.replay_app import ReplayApp
 
+    from console.cli.input_files import check_input_file
+
+    for one in ([path] if isinstance(path, (str, Path)) else path):
+        if Path(one).exists():  # a folder, empty, another MorphoNavi file: named before it is read as MCAP
+            check_input_file(one, "recording")
     try:
         recording = Recording(path, salvage=salvage)
     except ReplayError as exc:

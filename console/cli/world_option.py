@@ -24,30 +24,18 @@ def load_world_option(path: Path | None, option: str = "--world") -> Any:
         raise CliError(f"{option} {path}: is a folder; give a world file such as {WORLD_EXAMPLE}")
     if p.exists() and not os.access(p, os.R_OK):
         raise CliError(f"{option} {path}: cannot read it: no permission to read it")
+    if p.is_file():  # empty, not text, or another MorphoNavi file: said before it is read as a world
+        from console.cli.input_files import check_input_file
+
+        check_input_file(p, "world", option)
     try:
         return load_world(p)
     except WorldError as exc:
-        raise CliError(f"{option} {_wrong_kind(p) or exc}") from None
+        raise CliError(f"{option} {exc}") from None
     except OSError as exc:
         from pipeline.file_kind import os_error_words
 
         raise CliError(f"{option} {path}: cannot read it: {os_error_words(exc, p)}") from None
-
-
-def _wrong_kind(p: Path) -> str:
-    """``"x.scene.json is a scene ..., not a simulator world file: ..."`` when ``p`` is another MorphoNavi
-    file, else ``""``."""
-    import json
-
-    from pipeline.file_kind import kind_of_json, wrong_kind
-
-    try:
-        kind = kind_of_json(json.loads(p.read_text(encoding="utf-8")))
-    except (OSError, UnicodeDecodeError, ValueError, RecursionError):
-        return ""
-    if kind in ("world", "json"):
-        return ""
-    return wrong_kind("", str(p), kind, "world")
 
 
 __all__ = ["WORLD_EXAMPLE", "load_world_option"]
