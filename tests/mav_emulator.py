@@ -159,6 +159,7 @@ class ArduCopterEmulator(CopterPhysics, VehicleEvents, VehicleCommands):
         self.duplicate_delay = 0.0  # [s] every packet also arrives this late (a second telemetry link)
         self.signing_passphrase: str | None = None  # signing required with this key (GCS_Signing.cpp)
         self.ekf_fault_until = 0.0  # monotonic [s]: EKF_STATUS_REPORT reports a glitch until then
+        self.battery_unknown = False  # SYS_STATUS without a battery monitor: voltage UINT16_MAX, remaining -1
         self.origin_set = True  # False: no EKF origin yet (GPS_GLOBAL_ORIGIN requests ACCEPTED, never answered)
         self.position_bad = False  # the EKF failsafe's: the position is not trusted (position modes refused)
         self.physics_step = PHYSICS_STEP
@@ -369,8 +370,8 @@ class ArduCopterEmulator(CopterPhysics, VehicleEvents, VehicleCommands):
         if "SYS_STATUS" in self.streaming:
             prearm = mav.MAV_SYS_STATUS_PREARM_CHECK
             healthy = prearm if self.ekf_ready and not self.prearm_failure else 0
-            self._send("sys_status_send", prearm, prearm, healthy, 500, 15800, -1, int(self.battery), 0, 0, 0,
-                       0, 0, 0)
+            volts, left = (65535, -1) if self.battery_unknown else (15800, int(self.battery))  # UINT16_MAX / -1: unknown
+            self._send("sys_status_send", prearm, prearm, healthy, 500, volts, -1, left, 0, 0, 0, 0, 0, 0)
         if "EKF_STATUS_REPORT" in self.streaming:
             flags = EKF_GOOD if self.ekf_ready else 1 | 2
             if time.monotonic() < self.ekf_fault_until:  # a reset / glitch: flagged, variances high

@@ -305,3 +305,16 @@ def test_a_vehicle_without_an_ekf_origin_is_said_to_have_none() -> None:
         asked = [c for c in emu.record.commands if c[0] == mav.MAV_CMD_REQUEST_MESSAGE]
         assert len(asked) >= 5 and all(r == mav.MAV_RESULT_ACCEPTED for _, _, r in asked)
         assert link.telemetry.v.origin_now is None
+
+
+def test_unknown_battery_values_are_unknown_not_invalid_nor_empty() -> None:
+    """SYS_STATUS without a battery monitor: voltage_battery UINT16_MAX and battery_remaining -1 mean
+    'unknown' (MAVLink common.xml): no battery figure, not 0 %, and no dropped-message alarm."""
+    with vehicle(faults={"battery_unknown": True}) as (link, emu):
+        assert eventually(lambda: link.telemetry.stream_age("SYS_STATUS") < 0.5, 30.0)
+        st = link.latest_state()
+        assert st.battery is None and st.battery_voltage is None, (st.battery, st.battery_voltage)
+        assert st.health == "ok" and link.telemetry.v.invalid.get("SYS_STATUS", 0) == 0
+        emu.battery_unknown = False
+        assert eventually(lambda: link.latest_state().battery is not None, 30.0)
+        assert link.latest_state().battery_voltage == pytest.approx(15.8)
