@@ -24,10 +24,11 @@ from typing import Any, Iterable, Mapping, Protocol, Sequence
 import numpy as np
 
 from pipeline.scene import Scene, SceneObject
-from planner.cspace import box_distance, dilate, edge_closed, floating_objects, object_distances
+from planner.cspace import box_distance, dilate, edge_closed, floating_objects
 from planner.clearance import crowding
-from planner.flight_body import body_gap, flight_dilate, flight_gaps
+from planner.flight_body import body_gap, flight_dilate
 from planner.map_uncertainty import margins
+from planner.object_space import object_cells
 from planner.robot_model import MORPHOGEAR, RobotModel, RobotModelError
 
 
@@ -464,18 +465,14 @@ def build_grid(
     reason = np.zeros(ws.shape, dtype=np.uint8)
     danger, axes, reach_w = np.zeros(ws.shape, dtype=bool), ws.axes(), rb.radius + danger_band
     # air: the flying body; objects close within their mapping margin, the danger band ends as from the mapped box
-    pads, band = margins(objs), [0.0] * len(objs)
-    reason[(flight_gaps(objs, axes, rb, 0.0, pads) <= 1e-9) | flight_dilate(cell_obst, rb, res)] = Closed.CLEARANCE
-    danger |= (flight_gaps(objs, axes, rb, danger_band, band) <= danger_band + 1e-9) | \
-        flight_dilate(cell_obst, rb, res, danger_band)
+    air, air_dear, walk, walk_dear = object_cells(objs, axes, rb, danger_band, margins(objs), ws.floor)
+    reason[air | flight_dilate(cell_obst, rb, res)] = Closed.CLEARANCE
+    danger |= air_dear | flight_dilate(cell_obst, rb, res, danger_band)
     # ground layer: the walking cylinder
-    kh, z_band = max(1, min(ws.shape[2], int(math.ceil(rb.height / res - 1e-9)))), (ws.floor, ws.floor + rb.height)
-    d2, _ = object_distances(objs, axes, rb.radius, z_band=z_band, pads=pads)
+    kh = max(1, min(ws.shape[2], int(math.ceil(rb.height / res - 1e-9))))
     col = cell_obst[:, :, :kh].any(axis=2)
-    ground = (d2 <= rb.radius + 1e-9) | dilate(col, rb.radius, res)
-    reason[:, :, 0] = np.where(ground, Closed.CLEARANCE, Closed.OPEN)
-    d2, _ = object_distances(objs, axes, reach_w, z_band=z_band, pads=band)
-    danger[:, :, 0] = (d2 <= reach_w + 1e-9) | dilate(col, reach_w, res)
+    reason[:, :, 0] = np.where(walk | dilate(col, rb.radius, res), Closed.CLEARANCE, Closed.OPEN)
+    danger[:, :, 0] = walk_dear | dilate(col, reach_w, res)
     # what the cell (for the ground layer: its walking column) itself holds wins over clearance
     for mask, why in ((closed_unknown, Closed.UNKNOWN), (beneath, Closed.BENEATH), (surface, Closed.SURFACE),
                       (unl, Closed.UNLABELLED),
