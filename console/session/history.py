@@ -12,9 +12,10 @@ the session changes afterwards. Both stacks are saved beside the session (``hist
 from __future__ import annotations
 
 from collections import deque
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any, Sequence
 
+from pipeline.mapping.map_extent import id_numbers
 from pipeline.scene import Scene
 from planner.grid import GridError, PlanningGrid
 from planner.mission import Mission
@@ -222,7 +223,11 @@ class Undo(SessionCore):
         self._known = state.known  # the known space as it was then (before a capture, after a redo)
         route = Route(grid, self._route.start, self._weights)
         route.restore(state.route)
-        self._scene, self._grid, self._route, self._mission = state.scene, grid, route, state.mission
+        # ids are never given twice: the numbers the current map gave out stay taken in the one put back
+        taken = id_numbers(self._scene.objects, self._scene.last_ids)
+        last = {k: max(v, taken.get(k, 0)) for k, v in id_numbers(state.scene.objects, state.scene.last_ids).items()}
+        scene = replace(state.scene, last_ids={**taken, **last})
+        self._scene, self._grid, self._route, self._mission = scene, grid, route, state.mission
         self._capture, self._capture_meta = capture, meta
         if self._selected is not None and self._selected not in {o.id for o in state.scene.objects}:
             self._selected = None
