@@ -15,7 +15,10 @@ import math
 import statistics
 from typing import Sequence
 
-from pipeline.scene import Scene, SceneObject
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+from pipeline.scene import Capture, Scene, SceneObject
 
 UNDER_LIMIT = 0.15
 """The photo's ground level this far [m] under the floor is reported (mapping noise stays within it)."""
@@ -54,12 +57,37 @@ def _rests_on_another(o: SceneObject, others: Sequence[SceneObject]) -> bool:
     return False
 
 
-def _floor_evidence(objects: Sequence[SceneObject]) -> list[SceneObject]:
+def _floor_in_view(o: SceneObject, captures: Sequence[Capture], floor_z: float) -> bool:
+    """Whether the floor under ``o`` (its footprint centre at ``floor_z``) projects inside the image of its
+    capture. When it does not (below the image's bottom border, as for a camera in the air looking over
+    the room), whatever carries ``o`` may be out of view, and its bottom proves nothing about the pose.
+    ``True`` when the capture's pose or intrinsics are unknown (the object is then judged as before).
+
+    The capture's camera pose is ``world <- camera`` (camera in the OpenCV optical frame, z forward).
+    """
+    cap = next((c for c in captures if c.id == o.source.capture), captures[0] if len(captures) == 1 else None)
+    need = ("fx", "fy", "cx", "cy", "width", "height")
+    if cap is None or cap.camera_position is None or cap.camera_quaternion is None \
+            or not all(k in cap.intrinsics for k in need):
+        return True
+    p = Rotation.from_quat(cap.camera_quaternion).as_matrix().T @ (
+        np.array([o.position[0], o.position[1], floor_z], dtype=np.float64) - np.asarray(cap.camera_position))
+    if p[2] <= 1e-6:
+        return False
+    k = cap.intrinsics
+    u, v = k["fx"] * p[0] / p[2] + k["cx"], k["fy"] * p[1] / p[2] + k["cy"]
+    return bool(0.0 <= u < k["width"] and 0.0 <= v < k["height"])
+
+
+def _floor_evidence(objects: Sequence[SceneObject], captures: Sequence[Capture] = (),
+                    floor_z: float = 0.0) -> list[SceneObject]:
     """The objects whose box bottom can show a floating photo: whole in the image (a box cut by the
-    border is placed from part of itself) and standing on nothing else of the photo (the upper boxes
-    of a stack seen from the air float rightly)."""
+    border is placed from part of itself), standing on nothing else of the photo (the upper boxes
+    of a stack seen from the air float rightly) and with the floor under them in view (from the air
+    the floor near the robot is under the image: a box on a hidden support floats there rightly)."""
     world = [o for o in objects if o.frame == "world"]
-    return [o for o in world if not o.cut and not _rests_on_another(o, world)]
+    return [o for o in world if not o.cut and not _rests_on_another(o, world)
+            and (not captures or _floor_in_view(o, captures, floor_z))]
 
 
 def floor_check(scene: Scene, floor_z: float = 0.0, *, under_limit: float = UNDER_LIMIT,
@@ -72,8 +100,10 @@ def floor_check(scene: Scene, floor_z: float = 0.0, *, under_limit: float = UNDE
     wrong class (a 1.8 m "refrigerator" on a small purple toy) lands wherever its wrong size puts it,
     so one object proves nothing); with fewer than :data:`FEW` objects it is the second lowest bottom
     (a photo of one object is not judged), with 1.5x the limits.
-    Floating is judged only on objects the image border does not cut and that stand on no other
-    object of the photo, so a photo from the air of the upper boxes of a stack is not flagged.
+    Floating is judged only on objects the image border does not cut, that stand on no other
+    object of the photo and whose floor (the floor point under the footprint centre) is inside the image
+    at the capture's own camera pose, so a photo from the air of the upper boxes of a stack (their lower
+    boxes hidden, the floor under them below the image) is not flagged.
 
     A capture whose given camera pose the mapper found at odds with the photo's floor (its
     ``models["camera_pose_warning"]``, naming the fitted and given pitch and height) gives that warning first.
@@ -106,7 +136,7 @@ def _landing_check(scene: Scene, floor_z: float, under_limit: float, float_limit
         under = sorted((b, label) for label, b in bottoms if b < -under_at)
         named = ", ".join(f"{label} {b:+.2f} m" for b, label in under[:4])
         return [f"objects land under the floor ({what} is {-ground:.2f} m under it; {named}): {CAUSE}"]
-    evidence = sorted(b for _, b in _bottoms(_floor_evidence(scene.objects), floor_z))
+    evidence = sorted(b for _, b in _bottoms(_floor_evidence(scene.objects, scene.captures, floor_z), floor_z))
     if len(evidence) >= FEW:
         ground = float(statistics.quantiles(evidence, n=4, method="inclusive")[0])
         what, float_at = "the lower quartile of the box bottoms", float_limit
