@@ -209,17 +209,28 @@ def _h(vx, vy, vz, tx, ty, tz, ny, hscale, lay, lw, d2, rcol, levels, dw, s, mfr
     return ho
 
 
+@njit(cache=True, inline="always")
+def _hc(vx, vy, vz, tx, ty, tz, ny, hscale, lw, d2, rcol, levels, dw, s, mfres, zg):
+    """:func:`_h` chosen by type: the octile bound when ``d2`` is ``None`` (numba compiles that case
+    without the layer-aware code), else the larger of the two."""
+    if d2 is None:
+        return hscale * _octile(vx, vy, vz, tx, ty, tz)
+    return _h(vx, vy, vz, tx, ty, tz, ny, hscale, True, lw, d2, rcol, levels, dw, s, mfres, zg)
+
+
 @njit(cache=True)
-def _core_oct(cost, nx, ny, nz, t, elen, hscale, no_cc,
+def _core(cost, nx, ny, nz, t, elen, hscale, no_cc,
           offs, ddx, ddy, ddz, swept, n_swept,
           gbuf, state, parent, hpos, open_tag, hk, hi, n, expanded,
-          budget):
-    """Run A* with the octile heuristic until the goal is closed (status 1), the heap empties (0), it might overflow during
-    the next expansion (2, resumable: grow the heap and call again) or ``budget`` expansions are
-    reached (3, resumable: switch to the layer-aware heuristic). ``state[i] == open_tag``
-    marks a cell whose g is valid in this search (and, until it is closed, whose heap slot is
-    ``hpos[i]``), ``open_tag + 1`` a closed one. Returns ``(status, heap size, expanded, cost)``. Kept apart from :func:`_core_lay` so that
-    the hot loop of the walk cases stays as small as it was (measured about 1.5x faster)."""
+          budget, lw, d2, rcol, levels, dw, s, mfres, zg):
+    """Run A* until the goal is closed (status 1), the heap empties (0), it might overflow during the
+    next expansion (2, resumable: grow the heap and call again) or, with the octile heuristic
+    (``d2 is None``), ``budget`` expansions are reached (3, resumable: switch to the layer-aware
+    heuristic). ``state[i] == open_tag`` marks a cell whose g is valid in this search (and, until it is
+    closed, whose heap slot is ``hpos[i]``), ``open_tag + 1`` a closed one. Returns ``(status, heap size,
+    expanded, cost)``. One loop for both heuristics: numba compiles it once with ``d2`` an array
+    (layer-aware) and once with ``None`` (octile), where the layer-aware code and the budget's
+    counterpart are left out, so the walk cases' hot loop stays as small as a loop of its own."""
     closed_tag = open_tag + 1
     nyz = ny * nz
     tx = t // nyz
@@ -229,8 +240,9 @@ def _core_oct(cost, nx, ny, nz, t, elen, hscale, no_cc,
     while n > 0:
         if n + 26 > cap:
             return 2, n, expanded, 0.0
-        if expanded >= budget:
-            return 3, n, expanded, 0.0
+        if d2 is None:
+            if expanded >= budget:
+                return 3, n, expanded, 0.0
         g0 = hk[0, 1]
         u = hi[0]
         n -= 1
@@ -274,86 +286,14 @@ def _core_oct(cost, nx, ny, nz, t, elen, hscale, no_cc,
                 gbuf[v] = ng
                 parent[v] = d
                 p = hpos[v]
-                nf = ng + hscale * _octile(vx, vy, vz, tx, ty, tz)
+                nf = ng + _hc(vx, vy, vz, tx, ty, tz, ny, hscale, lw, d2, rcol, levels, dw, s, mfres, zg)
                 if _sift_up(hk, hi, hpos, p, nf, ng, v) == p:
                     _sift_down(hk, hi, hpos, p, n, nf, ng, v)
             elif ng != np.inf:
                 gbuf[v] = ng
                 state[v] = open_tag
                 parent[v] = d
-                nf = ng + hscale * _octile(vx, vy, vz, tx, ty, tz)
-                _sift_up(hk, hi, hpos, n, nf, ng, v)
-                n += 1
-    return 0, n, expanded, np.inf
-
-
-
-@njit(cache=True)
-def _core_lay(cost, nx, ny, nz, t, elen, hscale, no_cc,
-          offs, ddx, ddy, ddz, swept, n_swept,
-          gbuf, state, parent, hpos, open_tag, hk, hi, n, expanded,
-          lw, d2, rcol, levels, dw, s, mfres, zg):
-    """:func:`_core_oct` with the layer-aware heuristic (and no budget)."""
-    closed_tag = open_tag + 1
-    nyz = ny * nz
-    tx = t // nyz
-    ty = (t // nz) % ny
-    tz = t % nz
-    cap = hi.size
-    while n > 0:
-        if n + 26 > cap:
-            return 2, n, expanded, 0.0
-        g0 = hk[0, 1]
-        u = hi[0]
-        n -= 1
-        if n > 0:
-            _sift_down(hk, hi, hpos, 0, n, hk[n, 0], hk[n, 1], hi[n])
-        state[u] = closed_tag
-        expanded += 1
-        if u == t:
-            return 1, n, expanded, g0
-        ux = u // nyz
-        uy = (u // nz) % ny
-        uz = u % nz
-        cu = cost[u]
-        interior = 0 < ux < nx - 1 and 0 < uy < ny - 1 and 0 < uz < nz - 1
-        for d in range(26):
-            vx = ux + ddx[d]
-            vy = uy + ddy[d]
-            vz = uz + ddz[d]
-            if not interior:
-                if vx < 0 or vx >= nx or vy < 0 or vy >= ny or vz < 0 or vz >= nz:
-                    continue
-            v = u + offs[d]
-            cv = cost[v]
-            if cv == np.inf:
-                continue
-            sv = state[v]
-            if sv == closed_tag:
-                continue
-            if no_cc:
-                blocked = False
-                for j in range(n_swept[d]):
-                    if cost[u + swept[d, j]] == np.inf:
-                        blocked = True
-                        break
-                if blocked:
-                    continue
-            ng = g0 + elen[d] * (cu + cv)
-            if sv == open_tag:
-                if ng >= gbuf[v]:
-                    continue
-                gbuf[v] = ng
-                parent[v] = d
-                p = hpos[v]
-                nf = ng + _h(vx, vy, vz, tx, ty, tz, ny, hscale, True, lw, d2, rcol, levels, dw, s, mfres, zg)
-                if _sift_up(hk, hi, hpos, p, nf, ng, v) == p:
-                    _sift_down(hk, hi, hpos, p, n, nf, ng, v)
-            elif ng != np.inf:
-                gbuf[v] = ng
-                state[v] = open_tag
-                parent[v] = d
-                nf = ng + _h(vx, vy, vz, tx, ty, tz, ny, hscale, True, lw, d2, rcol, levels, dw, s, mfres, zg)
+                nf = ng + _hc(vx, vy, vz, tx, ty, tz, ny, hscale, lw, d2, rcol, levels, dw, s, mfres, zg)
                 _sift_up(hk, hi, hpos, n, nf, ng, v)
                 n += 1
     return 0, n, expanded, np.inf
@@ -365,7 +305,7 @@ def _search(cost, nx, ny, nz, s0, t, step, hscale, no_cc,
             gbuf, state, parent, hpos, gen, hk, hi, n, expanded,
             lay, lw, d2, rcol, levels, dw, s, mfres, zg, budget):
     """A* from flat index ``s0`` to ``t``; returns ``(status, cost, expanded, n, hk, hi)`` (status
-    as :func:`_core_oct`, never 2) where the heap arrays may have been replaced by larger ones.
+    as :func:`_core`, never 2) where the heap arrays may have been replaced by larger ones.
     ``n == 0`` starts a new search, otherwise the heap ``hk[:n], hi[:n]`` is resumed. ``step`` is
     the cell size [m], ``hscale = weight * min_cost * step``. Keeping the growth out of the hot
     loop lets numba treat the heap arrays there as loop-invariant."""
@@ -390,13 +330,13 @@ def _search(cost, nx, ny, nz, s0, t, step, hscale, no_cc,
         n = 1
     while True:
         if lay:
-            status, n, expanded, c = _core_lay(cost, nx, ny, nz, t, elen, hscale, no_cc, offs, ddx, ddy, ddz,
-                                               swept, n_swept, gbuf, state, parent, hpos, open_tag, hk, hi, n,
-                                               expanded, lw, d2, rcol, levels, dw, s, mfres, zg)
+            status, n, expanded, c = _core(cost, nx, ny, nz, t, elen, hscale, no_cc, offs, ddx, ddy, ddz, swept,
+                                           n_swept, gbuf, state, parent, hpos, open_tag, hk, hi, n, expanded,
+                                           budget, lw, d2, rcol, levels, dw, s, mfres, zg)
         else:
-            status, n, expanded, c = _core_oct(cost, nx, ny, nz, t, elen, hscale, no_cc, offs, ddx, ddy, ddz,
-                                               swept, n_swept, gbuf, state, parent, hpos, open_tag, hk, hi, n,
-                                               expanded, budget)
+            status, n, expanded, c = _core(cost, nx, ny, nz, t, elen, hscale, no_cc, offs, ddx, ddy, ddz, swept,
+                                           n_swept, gbuf, state, parent, hpos, open_tag, hk, hi, n, expanded,
+                                           budget, lw, None, rcol, levels, dw, s, mfres, zg)
         if status != 2:
             return status, c, expanded, n, hk, hi
         cap = 2 * hi.size
