@@ -429,8 +429,20 @@ class RobotLink(abc.ABC):
 
     def segment_under_way(self) -> bool:
         """A segment started by :meth:`run_segment` is still running (a look's turn, a mission's leg)."""
-        run = getattr(self, "_run", None)
+        run = self._current_run()
         return run is not None and not run.done
+
+    def _current_run(self) -> SegmentRun | None:
+        """The run of the segment last started by :meth:`run_segment`, done or not (``None`` before one or
+        after the link dropped it). Links override this; the default knows no segment."""
+        return None
+
+    def _refuse_while_running(self) -> None:
+        """Raise :class:`LinkError` naming the segment under way (one segment runs at a time); call it under
+        the lock that guards the link's run."""
+        run = self._current_run()
+        if run is not None and not run.done:
+            raise LinkError(f"a {run.segment.kind.value} segment is still running: hold or abort it first")
 
     @abc.abstractmethod
     def hold(self) -> None:

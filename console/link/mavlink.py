@@ -252,6 +252,9 @@ class MavlinkLink(RobotLink):
                 return None
         return self._make_state()
 
+    def _current_run(self) -> SegmentRun | None:
+        return self._run
+
     def _make_state(self) -> RobotState | None:
         run = self._run
         kind = run.segment.kind if run is not None and not run.done else None
@@ -302,8 +305,7 @@ class MavlinkLink(RobotLink):
         if taken:
             raise VehicleInControl(f"{taken}: take control first")
         with self._run_lock:
-            if self._run is not None and not self._run.done:
-                raise LinkError(f"a {self._run.segment.kind.value} segment is still running: hold or abort it first")
+            self._refuse_while_running()
             run = SegmentRun(segment)
             cancel = threading.Event()
             self._run, self._run_cancel = run, cancel
@@ -326,8 +328,7 @@ class MavlinkLink(RobotLink):
         seg = MissionSegment(SegmentKind.LAND, ((float(here[0]), float(here[1]), max(float(here[2]), floor)),
                                                 (float(here[0]), float(here[1]), floor)))
         with self._run_lock:
-            if self._run is not None and not self._run.done:
-                raise LinkError(f"a {self._run.segment.kind.value} segment is still running: hold or abort it first")
+            self._refuse_while_running()
             run = SegmentRun(seg)
             cancel = threading.Event()
             self._run, self._run_cancel = run, cancel

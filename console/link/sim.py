@@ -392,11 +392,13 @@ class SimRobot(RobotLink):
         self._finish(RunStatus.FAILED, error)
 
     # --- commands --------------------------------------------------------------------------------
+    def _current_run(self) -> SegmentRun | None:
+        return self._run
+
     def run_segment(self, segment: MissionSegment) -> SegmentRun:
         self._require_link()
         with self._lock:
-            if self._run is not None and not self._run.done:
-                raise LinkError(f"a {self._run.segment.kind.value} segment is still running: hold or abort it first")
+            self._refuse_while_running()
             run = SegmentRun(segment)
             try:
                 phases = plan_segment(segment, self._pos, self._yaw, self._landed, self._floor, self.config,
