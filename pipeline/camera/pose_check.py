@@ -57,10 +57,33 @@ def _rests_on_another(o: SceneObject, others: Sequence[SceneObject]) -> bool:
     return False
 
 
-def _floor_in_view(o: SceneObject, captures: Sequence[Capture], floor_z: float) -> bool:
-    """Whether the floor under ``o`` (its footprint centre at ``floor_z``) projects inside the image of its
-    capture. When it does not (below the image's bottom border, as for a camera in the air looking over
-    the room), whatever carries ``o`` may be out of view, and its bottom proves nothing about the pose.
+def _blocks(b: SceneObject, start: np.ndarray, end: np.ndarray) -> bool:
+    """Whether the segment ``start -> end`` (world [m]) passes through ``b``'s box (slab test in the box's
+    frame: ``l`` along its yaw, ``w`` across, ``h`` up; :func:`pipeline.mapping.map_support.footprint`)."""
+    c, s = math.cos(b.yaw), math.sin(b.yaw)
+    to_box = np.array([[c, s, 0.0], [-s, c, 0.0], [0.0, 0.0, 1.0]])
+    p0 = to_box @ (start - np.asarray(b.position, dtype=np.float64))
+    d = to_box @ (end - start)
+    half = np.array([b.size[2], b.size[0], b.size[1]], dtype=np.float64) / 2.0
+    lo, hi = 0.0, 1.0
+    for k in range(3):
+        if abs(d[k]) < 1e-12:
+            if abs(p0[k]) > half[k]:
+                return False
+            continue
+        t0, t1 = sorted(((-half[k] - p0[k]) / d[k], (half[k] - p0[k]) / d[k]))
+        lo, hi = max(lo, t0), min(hi, t1)
+        if lo > hi:
+            return False
+    return True
+
+
+def _floor_in_view(o: SceneObject, captures: Sequence[Capture], floor_z: float,
+                   others: Sequence[SceneObject] = ()) -> bool:
+    """Whether the floor under ``o`` (its footprint centre at ``floor_z``) is seen by its capture: inside
+    the image and not behind another of ``others`` (the photo's objects). When it is not (below the
+    image's bottom border, or behind a desk in front, as for a camera in the air looking over the room),
+    whatever carries ``o`` may be out of view, and its bottom proves nothing about the pose.
     ``True`` when the capture's pose or intrinsics are unknown (the object is then judged as before).
 
     The capture's camera pose is ``world <- camera`` (camera in the OpenCV optical frame, z forward).
@@ -70,24 +93,28 @@ def _floor_in_view(o: SceneObject, captures: Sequence[Capture], floor_z: float) 
     if cap is None or cap.camera_position is None or cap.camera_quaternion is None \
             or not all(k in cap.intrinsics for k in need):
         return True
-    p = Rotation.from_quat(cap.camera_quaternion).as_matrix().T @ (
-        np.array([o.position[0], o.position[1], floor_z], dtype=np.float64) - np.asarray(cap.camera_position))
+    floor = np.array([o.position[0], o.position[1], floor_z], dtype=np.float64)
+    eye = np.asarray(cap.camera_position, dtype=np.float64)
+    p = Rotation.from_quat(cap.camera_quaternion).as_matrix().T @ (floor - eye)
     if p[2] <= 1e-6:
         return False
     k = cap.intrinsics
     u, v = k["fx"] * p[0] / p[2] + k["cx"], k["fy"] * p[1] / p[2] + k["cy"]
-    return bool(0.0 <= u < k["width"] and 0.0 <= v < k["height"])
+    if not (0.0 <= u < k["width"] and 0.0 <= v < k["height"]):
+        return False
+    return not any(b is not o and b.frame == "world" and _blocks(b, eye, floor) for b in others)
 
 
 def _floor_evidence(objects: Sequence[SceneObject], captures: Sequence[Capture] = (),
                     floor_z: float = 0.0) -> list[SceneObject]:
     """The objects whose box bottom can show a floating photo: whole in the image (a box cut by the
     border is placed from part of itself), standing on nothing else of the photo (the upper boxes
-    of a stack seen from the air float rightly) and with the floor under them in view (from the air
-    the floor near the robot is under the image: a box on a hidden support floats there rightly)."""
+    of a stack seen from the air float rightly) and with the floor under them seen (from the air the
+    floor near the robot is under the image, or behind the furniture in front: a box on a hidden
+    support floats there rightly)."""
     world = [o for o in objects if o.frame == "world"]
     return [o for o in world if not o.cut and not _rests_on_another(o, world)
-            and (not captures or _floor_in_view(o, captures, floor_z))]
+            and (not captures or _floor_in_view(o, captures, floor_z, world))]
 
 
 def floor_check(scene: Scene, floor_z: float = 0.0, *, under_limit: float = UNDER_LIMIT,
@@ -101,8 +128,8 @@ def floor_check(scene: Scene, floor_z: float = 0.0, *, under_limit: float = UNDE
     so one object proves nothing); with fewer than :data:`FEW` objects it is the second lowest bottom
     (a photo of one object is not judged), with 1.5x the limits.
     Floating is judged only on objects the image border does not cut, that stand on no other
-    object of the photo and whose floor (the floor point under the footprint centre) is inside the image
-    at the capture's own camera pose, so a photo from the air of the upper boxes of a stack (their lower
+    object of the photo and whose floor (the floor point under the footprint centre) is seen at the
+    capture's own camera pose (inside the image, behind no other object of the photo), so a photo from the air of the upper boxes of a stack (their lower
     boxes hidden, the floor under them below the image) is not flagged.
 
     A capture whose given camera pose the mapper found at odds with the photo's floor (its
