@@ -5,10 +5,8 @@ size ``(w, h, l)`` and yaw about +z [rad] (see :mod:`pipeline.scene`).
 
 - :func:`taken_overlap`: an observation that matched nothing may not become a new object when it is
   another view of an object a detection of the same capture updated: it overlaps that object (in
-  footprint and height), or it is a **partial** view (cut, occluded or hidden: its centre a guess from
-  the class size) whose association gate held only objects other detections took. A detector's second,
-  smaller box on one chair (or a false one next to it) used to start a second chair that later captures
-  then split their views between.
+  footprint and height). A detector's second, smaller box on one chair (or a false one next to it) used
+  to start a second chair that later captures then split their views between.
 - :func:`merge_overlapping`: two map objects of one class that overlap in footprint and height are one
   object mapped twice (two solid objects cannot share the space): the older one (first in the map)
   keeps its id and takes the other's observations; the other is removed. Pinned objects are left alone
@@ -50,7 +48,7 @@ def seen_apart(a: SceneObject, b: SceneObject) -> bool:
 
 
 def taken_overlap(o: SceneObject, objects: Sequence[SceneObject], taken: set[int], keys: dict[str, str],
-                  min_overlap: float, min_vertical: float, gated: Sequence[int] = ()) -> str | None:
+                  min_overlap: float, min_vertical: float) -> str | None:
     """Why ``o`` may not become a new object (``None``: it may).
 
     Args:
@@ -59,16 +57,11 @@ def taken_overlap(o: SceneObject, objects: Sequence[SceneObject], taken: set[int
         taken: Indices into ``objects`` that other observations of the same capture updated.
         keys: Label -> class key (synonyms resolved).
         min_overlap, min_vertical: The fusion's overlap thresholds.
-        gated: Indices of objects within ``o``'s association gate, for a partial view (empty otherwise).
     """
     for j in sorted(taken):
         m = objects[j]
         if keys[m.label] == keys[o.label] and overlapping(o, m, min_overlap, min_vertical):
             return f"overlaps {m.id}, which another detection of this capture updated: not added"
-    for j in gated:
-        if j in taken:
-            return (f"seen in part where {objects[j].id} is, which another detection of this capture "
-                    "updated: not added")
     return None
 
 
