@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import threading
 import time
 
 import numpy as np
@@ -152,9 +153,10 @@ def _abort_in_the_takeoff(robot: SimRobot) -> None:
     _until(lambda: manager.progress().kind is TAKEOFF, "the take-off")
     manager.abort()
     assert manager.wait(30.0) is MissionStatus.ABORTED
-    time.sleep(0.2)
+    # the robot's next state samples say it stopped (waited for: a loaded machine publishes late)
+    _until(lambda: robot.latest_state().mode in (Mode.HOLDING, Mode.IDLE)
+           and robot.latest_state().speed == pytest.approx(0.0, abs=1e-9), "the robot stopped")
     st = robot.latest_state()
-    assert st.mode in (Mode.HOLDING, Mode.IDLE) and st.speed == pytest.approx(0.0, abs=1e-9)
     with pytest.raises(MissionStateError):
         manager.resume()
     manager.start(Mission((MissionSegment(WALK, (st.position, st.position)),), id="next"))  # a new one is fine
@@ -174,8 +176,32 @@ def test_a_blocked_path_pauses_the_mission_with_the_reason(robot: SimRobot) -> N
     assert manager.wait(30.0) is MissionStatus.ABORTED
 
 
+FAILSAFE_AFTER = 2.0
+"""The manager's failsafe_after in the link-loss tests [s]: far above how long a loaded machine's simulator
+thread goes without publishing (0.3 s dropped a resumed mission into a false failsafe under load); the
+outages themselves start on a state and end when the test says so, not after a duration."""
+
+
+def _drop_link_when(robot: SimRobot, cond) -> threading.Event:
+    """Start an outage (until :func:`_restore_link`) from the simulator's own thread at the first state
+    with ``cond(state)``; returns the event set when it started."""
+    dropped = threading.Event()
+
+    def watch(s) -> None:
+        if not dropped.is_set() and cond(s):
+            robot.drop_link(3600.0)
+            dropped.set()
+
+    robot.subscribe(watch)
+    return dropped
+
+
+def _restore_link(robot: SimRobot) -> None:
+    robot.drop_link(0.0)  # the outage ends now (simulated time)
+
+
 def test_link_loss_runs_the_failsafe_and_the_mission_survives() -> None:
-    # time_scale 1 so the outage (simulated seconds) and the manager (wall seconds) share a clock
+    # time_scale 1 so the robot's own link-loss hold and landing (simulated seconds) follow the manager's clock
     robot = _robot(time_scale=1.0, fly_speed=0.6, climb_rate=3.0, link_loss_hold=0.2, link_loss_land=0.6,
                    descent_rate=3.0)
     hop = Mission((
@@ -185,15 +211,17 @@ def test_link_loss_runs_the_failsafe_and_the_mission_survives() -> None:
         MissionSegment(WALK, ((2.5, 2.2, 0.0), (2.5, 2.9, 0.0))),
     ))
     try:
-        manager = MissionManager(robot, failsafe_after=0.3, failsafe_hold=0.3)
+        manager = MissionManager(robot, failsafe_after=FAILSAFE_AFTER, failsafe_hold=0.3)
+        dropped = _drop_link_when(robot, lambda s: s.position[2] > 1.4 and s.position[1] > 0.9)  # in the flight
         manager.start(hop)
-        _until(lambda: manager.progress().kind is FLY, "the flight")
-        time.sleep(0.2)
-        robot.drop_link(2.0)
-        assert manager.wait(30.0, until=[MissionStatus.FAILSAFE]) is MissionStatus.FAILSAFE
-        deadline = time.monotonic() + 60.0
-        while (robot.latest_state().link_ok is False or not robot.latest_state().landed) and time.monotonic() < deadline:
-            time.sleep(0.02)
+        assert manager.wait(60.0, until=[MissionStatus.FAILSAFE]) is MissionStatus.FAILSAFE, \
+            [e.message for e in manager.events]
+        assert dropped.is_set()
+        # the failsafe's hold and landing are not delivered (no link); it ends; the robot lands by itself
+        _until(lambda: any("FAILSAFE landing not delivered" in e.message for e in manager.events)
+               and not manager._failsafe_acting, "the failsafe's end")
+        _restore_link(robot)
+        _until(lambda: robot.latest_state().link_ok and robot.latest_state().landed, "the link back, landed")
         msgs = [e.message for e in manager.events]
         assert any(m.startswith("FAILSAFE: robot not heard for") for m in msgs)
         assert any("not delivered" in m for m in msgs)  # no link: the robot's own failsafe landed it
@@ -210,10 +238,19 @@ def test_link_loss_runs_the_failsafe_and_the_mission_survives() -> None:
 
 
 class _SlowHold(SimRobot):
-    """A robot whose hold command takes long to confirm (a MAVLink BRAKE waiting out its ACK retries)."""
+    """A robot whose hold command takes long to confirm (a MAVLink BRAKE waiting out its ACK retries): it
+    returns when the test sets ``release``."""
+
+    def __init__(self, **kw) -> None:
+        super().__init__(**kw)
+        self.holding = threading.Event()
+        self.release = threading.Event()
+        self.hold_sent_at = math.inf
 
     def hold(self) -> None:
-        time.sleep(1.5)
+        self.hold_sent_at = time.monotonic()  # after the failsafe set its failsafe_hold deadline
+        self.holding.set()
+        assert self.release.wait(120.0), "the test never released the hold"
         super().hold()
 
 
@@ -225,21 +262,26 @@ def test_a_link_back_during_a_slow_hold_pauses_instead_of_landing() -> None:
         MissionSegment(FLY, ((2.5, 0.7, 1.5), (2.5, 2.2, 1.5))),
     ))
     try:
-        manager = MissionManager(robot, failsafe_after=0.3, failsafe_hold=0.3)
+        manager = MissionManager(robot, failsafe_after=FAILSAFE_AFTER, failsafe_hold=0.3)
+        _drop_link_when(robot, lambda s: s.position[2] > 1.4 and s.position[1] > 0.8)  # in the flight
         manager.start(hop)
-        _until(lambda: manager.progress().kind is FLY, "the flight")
-        # back after 1.2 s: before the hold returns (failsafe at >= 0.3 s + 1.5 s), after failsafe_hold (0.3 s)
-        # has run out, and later than the failsafe even when a loaded machine decides it 0.9 s late
-        robot.drop_link(1.2)
+        assert robot.holding.wait(60.0), [e.message for e in manager.events]  # the failsafe's hold is sent
+        # the link returns while the hold is still unconfirmed, after failsafe_hold (counted from the
+        # failsafe, before the hold was sent) has run out
+        _until(lambda: time.monotonic() > robot.hold_sent_at + manager.failsafe_hold, "failsafe_hold over")
+        _restore_link(robot)
+        _until(lambda: robot.link_age_now() < FAILSAFE_AFTER / 2, "the link back")
+        robot.release.set()
         assert manager.wait(30.0, until=[MissionStatus.PAUSED]) is MissionStatus.PAUSED, \
             [e.message for e in manager.events]
         msgs = [e.message for e in manager.events]
         assert any(m.startswith("FAILSAFE: robot not heard for") for m in msgs)
         assert any(m.startswith("link restored during the failsafe hold") for m in msgs)
         assert not any("landing" in m for m in msgs)
-        time.sleep(0.3)
+        time.sleep(0.3)  # an observation window: nothing lands it afterwards
         assert not robot.latest_state().landed
     finally:
+        robot.release.set()
         robot.close()
 
 
