@@ -43,6 +43,7 @@ from scipy import ndimage
 
 from planner.astar import AStarSearcher
 from planner.cspace import cube_ball, dilate
+from planner.flight_body import flight_dilate
 from planner.grid import Closed, CostWeights, GridError, PlanningGrid, build_grid
 from planner.search_viewpoints import UNKNOWN, blocking_cells, path_costs
 from planner.view_rays import VIEW_RANGE, in_view, line_of_sight, wrap as _wrap
@@ -74,6 +75,8 @@ MAX_SCORED = 250
 """Candidates whose lines of sight are cast (the best by field-of-view count per cost)."""
 MAX_NEIGHBOURS = 400
 """Neighbourhood cells sampled (evenly) for the score."""
+WIDEN_HEADINGS = 8
+"""Headings tried (evenly round) when only the edge of where the robot can go is left to look at."""
 
 
 class GoalLookError(ValueError):
@@ -183,7 +186,8 @@ def spots_to_open(grid: PlanningGrid, state: np.ndarray, target: Sequence[float]
     if len(need) == 0:
         return np.zeros((0, 3), dtype=np.int64), 0.0
     rb = grid.robot
-    clear = ~dilate(blocking, max(rb.radius, rb.flying_radius), ws.resolution)
+    # the flying body as the planner keeps it (the sphere and the body's height above the spot)
+    clear = ~flight_dilate(blocking, rb, ws.resolution)
     clear[:, :, :2] = False  # hovering spots only: a floor spot needs its floor seen (the same problem)
     sub = np.zeros(ws.shape, dtype=bool)
     sub[::2, ::2, :] = True
@@ -249,13 +253,14 @@ def cells_to_open(grid: PlanningGrid, cost: np.ndarray, start_cell: Sequence[int
     along = np.cumsum(step) - np.cumsum(step)[first]
     r = max(grid.robot.radius, grid.robot.flying_radius) + ws.resolution / 2
     order = np.full(ws.shape, np.inf)
+    up = int(math.ceil(grid.robot.height / ws.resolution - 1e-9))  # the flying body's height above its cell
     for n in range(first, len(path)):
         i, j, z = path[n]
         if not (on[n] or n == len(path) - 1):
             continue
         mark[i, j, z] = True
         lo = z if z > 0 else 0
-        hi = z + 1 if z > 0 else k
+        hi = z + 1 + up if z > 0 else k
         order[i, j, lo:hi] = np.minimum(order[i, j, lo:hi], max(0.0, along[n]))
         mark[i, j, lo:hi] = True
     body = dilate(mark, r, ws.resolution) & unknown
@@ -319,6 +324,7 @@ def next_look(grid: PlanningGrid, cost: np.ndarray, start_cell: Sequence[int], t
     ok[tuple(int(v) for v in start_cell)] = bool(np.isfinite(dist[tuple(int(v) for v in start_cell)]))
     idx = np.argwhere(ok)
     eyes, ground = _eyes_of(grid, idx)
+    base = (idx, eyes, ground)
     empty = np.zeros((0, 3), dtype=np.int64)
     spots, spot_w, stretch = empty, np.zeros(0), empty
     if not _some_look_sees(grid, blocking, eyes, need, t, avoid := list(avoid)):
@@ -333,7 +339,7 @@ def next_look(grid: PlanningGrid, cost: np.ndarray, start_cell: Sequence[int], t
     pts_i = np.concatenate([need, spots, nb]).astype(np.int64) if len(need) + len(spots) + len(nb) else \
         np.zeros((0, 3), dtype=np.int64)
     if len(pts_i) == 0:
-        return []
+        return _widen(grid, st, blocking, dist, *base, t, avoid, len(need))
     kind = np.concatenate([np.zeros(len(need)), np.ones(len(spots)), np.full(len(nb), 2)])
     weight = np.concatenate([np.full(len(need), NEED_WEIGHT), spot_w, nb_w])
     # two headings each: towards the goal, and towards the middle of the spots to open
@@ -343,7 +349,7 @@ def next_look(grid: PlanningGrid, cost: np.ndarray, start_cell: Sequence[int], t
     keep = ~_repeats(eyes, yaws, avoid) & (np.hypot(t[0] - eyes[:, 0], t[1] - eyes[:, 1]) >= 0.25)
     idx, eyes, yaws, ground = idx[keep], eyes[keep], yaws[keep], ground[keep]
     if len(idx) == 0:
-        return []
+        return _widen(grid, st, blocking, dist, *base, t, avoid, len(need))
     costs = dist[tuple(idx.T)]
     pts = ws.centers(pts_i)
     fov = in_view(eyes, yaws, pts, grid.robot.camera_half_vfov)
@@ -356,7 +362,7 @@ def next_look(grid: PlanningGrid, cost: np.ndarray, start_cell: Sequence[int], t
     top = np.argsort(-bound, kind="stable")[:MAX_SCORED]
     top = top[bound[top] > 0]
     if len(top) == 0:
-        return []
+        return _widen(grid, st, blocking, dist, *base, t, avoid, len(need))
     seen = np.zeros((len(top), len(pts_i)), dtype=bool)
     seen[:, is_need] = need_seen[top]
     seen[:, ~is_need] = line_of_sight(grid, blocking, eyes[top], pts_i[~is_need], fov[top][:, ~is_need])
@@ -385,7 +391,62 @@ def next_look(grid: PlanningGrid, cost: np.ndarray, start_cell: Sequence[int], t
                f"{sees}; path cost {costs[n]:.1f}")
         out.append(Look(tuple(float(v) for v in goal), tuple(float(v) for v in eye), float(yaws[n]), mode, share,
                         int(len(need)), float(gain[o]), float(costs[n]), why))
-    return out
+    return out or _widen(grid, st, blocking, dist, *base, t, avoid, len(need))
+
+
+def _widen(grid: PlanningGrid, st: np.ndarray, blocking: np.ndarray, dist: np.ndarray, idx: np.ndarray,
+           eyes: np.ndarray, ground: np.ndarray, t: Sequence[float], avoid: list, n_need: int) -> list[Look]:
+    """When no reachable candidate sees the goal, its neighbourhood or the chain's cells: the look (any of
+    :data:`WIDEN_HEADINGS` headings) that sees most of the unknown cells at the edge of where the robot can go
+    (within its radius and a cell of a reachable cell, up to :data:`NEIGHBOURHOOD_TOP`; weighted
+    ``1 / (1 + d)``, ``d`` their distance in plan from the goal [m]): more room for the next look."""
+    ws = grid.workspace
+    rb = grid.robot
+    _, _, zs = ws.axes()
+    edge = dilate(np.isfinite(dist), max(rb.radius, rb.flying_radius) + ws.resolution, ws.resolution)
+    edge &= (np.asarray(st) == UNKNOWN) & (zs <= ws.floor + NEIGHBOURHOOD_TOP)[None, None, :]
+    cells = np.argwhere(edge)
+    if len(cells) == 0 or len(idx) == 0:
+        return []
+    if len(cells) > MAX_NEIGHBOURS:
+        cells = cells[np.linspace(0, len(cells) - 1, MAX_NEIGHBOURS).round().astype(int)]
+    pts = ws.centers(cells)
+    w = 1.0 / (1.0 + np.hypot(pts[:, 0] - t[0], pts[:, 1] - t[1]))
+    # the air a take-off needs seen (the flying body and the danger band over the take-off layer) counts most
+    w[(pts[:, 2] > ws.floor + ws.resolution) & (pts[:, 2] <= ws.floor + 2 * ws.resolution + rb.height
+                                                + rb.flying_radius)] *= FLOOR_WEIGHT
+    costs = dist[tuple(idx.T)]
+    if len(idx) > MAX_SCORED:  # the cheapest to reach
+        near = np.argsort(costs, kind="stable")[:MAX_SCORED]
+        idx, eyes, ground, costs = idx[near], eyes[near], ground[near], costs[near]
+    k = len(idx)
+    yaws = np.repeat(2 * np.pi * np.arange(WIDEN_HEADINGS) / WIDEN_HEADINGS, k)
+    idx, eyes, ground, costs = (np.concatenate([v] * WIDEN_HEADINGS) for v in (idx, eyes, ground, costs))
+    keep = ~_repeats(eyes, yaws, avoid)
+    idx, eyes, ground, costs, yaws = idx[keep], eyes[keep], ground[keep], costs[keep], yaws[keep]
+    if len(idx) == 0:
+        return []
+    fov = in_view(eyes, yaws, pts, rb.camera_half_vfov)
+    bound = (fov @ w) / (costs + COST0)
+    top = np.argsort(-bound, kind="stable")[:MAX_SCORED]
+    top = top[bound[top] > 0]
+    if len(top) == 0:
+        return []
+    seen = line_of_sight(grid, blocking, eyes[top], cells, fov[top])
+    gain = seen @ w
+    b = int(np.argmax(gain / (costs[top] + COST0)))
+    if gain[b] <= 0:
+        return []
+    n = top[b]
+    goal = ws.centers(idx[n:n + 1])[0]
+    if ground[n]:
+        goal[2] = ws.floor
+    mode, eye = ("walk" if ground[n] else "fly"), eyes[n]
+    why = (f"({eye[0]:.2f}, {eye[1]:.2f}, {eye[2]:.2f}) m {'on the floor' if ground[n] else 'hovering'}, facing "
+           f"{math.degrees(yaws[n]) % 360:.0f}°: sees {int(seen[b].sum())} unseen cells at the edge of where the "
+           f"robot can go (nothing it reaches sees the goal yet: more room for the next look); path cost {costs[n]:.1f}")
+    return [Look(tuple(float(v) for v in goal), tuple(float(v) for v in eye), float(yaws[n]), mode, 0.0, n_need,
+                 float(gain[b]), float(costs[n]), why)]
 
 
 def hidden_by(grid: PlanningGrid, state: np.ndarray, eye: Sequence[float], yaw: float,

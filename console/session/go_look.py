@@ -299,6 +299,13 @@ class GoLookJob(JobThread):
                       f"route planned ({res.message}); Register and Execute it", "success")
             return
         grid = s.grid
+        cell = grid.workspace.cell_of(goal)
+        owner = grid.owner_of(cell) if cell is not None and grid.reason is not None else None
+        if owner is not None and "not seen yet" not in res.message:  # an object's clearance closes it: no look opens it
+            out.next_look = None
+            self._end(f"after {out.looks} look{'s' if out.looks != 1 else ''} the goal {_fmt(goal[:2])} is refused "
+                      f"for a reason a look does not change: {res.message}", "warning")
+            return
         why = hidden_by(grid, known_state(grid), look.eye, look.yaw, goal)
         nxt = self._look(goal)
         where = "floor" if goal[2] - grid.workspace.floor < grid.workspace.resolution else "space"

@@ -118,3 +118,21 @@ def test_bad_targets_are_refused_naming_the_field() -> None:
         next_look(grid, route.cost_array, WS.cell_of((2.5, 1.0, 0.0)), (float("nan"), 5.0, 0.0))
     with pytest.raises(GoalLookError, match="state"):
         next_look(grid, route.cost_array, WS.cell_of((2.5, 1.0, 0.0)), GOAL, state=np.zeros((2, 2, 2)))
+
+
+def test_when_every_look_towards_the_goal_was_had_the_edge_of_the_seen_patch_is_looked_at() -> None:
+    """A robot that can only walk a small seen patch (no take-off: the air above is unseen), whose looks
+    towards the goal and towards the space to open were all had, is offered a look in another heading at
+    the edge of the patch (more room for the next look), never a repeat; before, no look at all."""
+    xs, ys, zs = WS.axes()
+    free = np.zeros(WS.shape, bool)
+    free[np.ix_((xs > 2.0) & (xs < 3.0), (ys > 0.25) & (ys < 1.75), zs < 0.5)] = True
+    route = Route(build_grid([WALL], WS, known=_known(free)), (2.5, 1.0, 0.0))
+    eye = (2.5, 1.0, 0.35)
+    avoid = [(eye, math.radians(a)) for a in (58.0, 90.0, 124.0)]
+    look = route.look_for(GOAL, avoid=avoid)
+    assert look is not None and look.mode == "walk" and look.sees == 0.0 and look.gain > 0
+    assert "at the edge of where the robot can go" in look.why
+    for pos, yaw in avoid:
+        turned = abs((look.yaw - yaw + math.pi) % (2 * math.pi) - math.pi)
+        assert math.dist(look.eye, pos) > 0.75 or turned > math.radians(45)
