@@ -63,6 +63,7 @@ from pipeline.mapping.known_space_update import DepthNoise, capture_update  # no
 from pipeline.scene import SceneObject, Sighting, Source  # noqa: E402
 from planner.cspace import box_distance  # noqa: E402
 from planner.grid import CellState, PlanningGrid, Workspace, box_cells, build_grid  # noqa: E402
+from planner.robot_model import RobotModel  # noqa: E402
 from planner.route import Route  # noqa: E402
 
 BODY = 0.25
@@ -71,6 +72,9 @@ POS_SIGMA = 0.08
 """Mapped object position noise, 1 sigma per horizontal axis [m]."""
 YAW_SIGMA = math.radians(3.0)
 """Mapped object heading noise, 1 sigma [rad]."""
+ROBOT = RobotModel(radius=RADIUS, flying_radius=RADIUS, flying_height=HEIGHT, mapping_margin=True)
+"""The new planner's robot: the flying body's whole height and the mapping margin on (both off in the
+default robot model: planner.robot_model)."""
 
 
 def legacy_grid(objs: list[SceneObject], ws: Workspace, margin: float) -> PlanningGrid:
@@ -237,7 +241,7 @@ def follow_viewpoint(room: Room, objs: list[SceneObject], ks: KnownSpace, grid: 
     known = {o.id for o in objs}
     new_ids = {v.id for v in visible_objects(r, 200)} - known
     objs2 = objs + mapped_objects(room, new_ids, fw.rng, 0.0)
-    grid2 = build_grid(objs2, WS, RADIUS, known=ks2)
+    grid2 = build_grid(objs2, WS, known=ks2, robot=ROBOT)
     route2 = Route(grid2, end)
     res = route2.plan(end, goal)
     seen = ks.state() == KnownState.FREE
@@ -262,7 +266,7 @@ def run_case(room: Room, objs: list[SceneObject], ks: KnownSpace, tallies: dict[
     grids = {"today": legacy_grid(objs, WS, RADIUS)}
     tallies["today"].build_ms.append((time.perf_counter() - t0) * 1e3)
     t0 = time.perf_counter()
-    grids["new"] = build_grid(objs, WS, RADIUS, known=ks)
+    grids["new"] = build_grid(objs, WS, known=ks, robot=ROBOT)
     tallies["new"].build_ms.append((time.perf_counter() - t0) * 1e3)
     for name, grid in grids.items():
         tl = tallies[name]

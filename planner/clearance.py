@@ -27,7 +27,7 @@ def crowding(grid: Any, cell: Sequence[int]) -> tuple[SceneObject, float, float]
     c = ws.centers(np.array([cell]))[0]
     best: tuple[SceneObject, float, float] | None = None
     for o in grid.objects:
-        pad = object_margin(o)
+        pad = object_margin(o) if getattr(robot, "mapping_margin", False) else 0.0
         if int(cell[2]) == 0:
             lo, hi = o.position[2] - o.size[1] / 2, o.position[2] + o.size[1] / 2
             if hi <= ws.floor or lo >= ws.floor + robot.height:

@@ -5,8 +5,7 @@ World frame (z up) [m]. A cell obstacle is the cell's cube; the distance from a 
 another cell's cube is ``resolution * sqrt(sum(max(|d| - 1/2, 0)^2))`` for the index offset ``d``,
 so :func:`dilate` closes exactly the cells whose centre lies within ``radius`` of an obstacle cell
 (its surface). Object boxes use their exact oriented box (:func:`box_distance`), grown in plan by
-their mapping margin (:func:`planner.map_uncertainty.object_margin`: 0 for pinned objects and objects
-without sightings).
+their mapping margin when asked (:func:`planner.map_uncertainty.object_margin`).
 
 Space outside the workspace is closed (nothing there was ever mapped): its faces are obstacles like
 any other, and the robot keeps its radius from them (:func:`edge_closed`, :func:`edge_gaps`): in plan
@@ -25,7 +24,6 @@ import numpy as np
 from scipy import ndimage
 
 from pipeline.scene import SceneObject
-from planner.map_uncertainty import margins
 
 FLOAT_TOL = 0.10
 """An object whose bottom is more than this [m] above the floor, with no object under it within this
@@ -58,7 +56,7 @@ def _window(axis: np.ndarray, lo: float, hi: float) -> np.ndarray:
 
 def _pads(objects: Sequence[SceneObject], pads: Sequence[float] | None) -> list[float]:
     if pads is None:
-        return margins(objects)
+        return [0.0] * len(objects)
     if len(pads) != len(objects):
         raise ValueError(f"pads: expected one per object ({len(objects)}), got {len(pads)}")
     return [float(v) for v in pads]
@@ -73,7 +71,8 @@ def object_distances(objects: Sequence[SceneObject], axes: tuple[np.ndarray, np.
     With ``z_band = (z0, z1)`` the result is 2D ``[nx, ny]``: horizontal distance from the column's
     centre to the footprints of the objects whose height range overlaps ``z0..z1`` (a walking robot's
     cylinder); else 3D ``[nx, ny, nz]`` Euclidean distances. Each object's footprint is grown by its
-    ``pads`` entry [m] (default: its mapping margin, :func:`planner.map_uncertainty.object_margin`).
+    ``pads`` entry [m] (default none; the planner passes the mapping margins,
+    :func:`planner.map_uncertainty.object_margin`, when its robot has ``mapping_margin``).
     """
     xs, ys, zs = axes
     shape = (len(xs), len(ys)) if z_band is not None else (len(xs), len(ys), len(zs))

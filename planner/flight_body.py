@@ -4,11 +4,12 @@ World frame (z up) [m]. In the air the robot is planned as the union of
 
 - the sphere of ``robot.flying_radius`` around its origin (the propellers' disc with a safety margin,
   taken round: below the origin too), and
-- the vertical cylinder of the same radius from the origin up to ``robot.height`` above it (the body
-  the simulator flies: ``SimConfig.body_height`` above the origin, :mod:`console.link.sim_contact`).
+- the vertical cylinder of the same radius from the origin up to ``robot.flying_height`` above it (the
+  body the simulator flies is ``SimConfig.body_height`` = 0.45 m above the origin,
+  :mod:`console.link.sim_contact`; ``flying_height = 0``, the default robot's, leaves the sphere alone).
 
-A flight cell is closed when an obstacle comes within this body at the cell's centre: an object whose
-underside is 0.40 m above a hover cell closes it (the 0.45 m body reaches it), one at 0.50 m does not
+A flight cell is closed when an obstacle comes within this body at the cell's centre: with
+``flying_height = 0.45`` an object whose underside is 0.40 m above a hover cell closes it, one at 0.50 m does not
 (beyond the body's top and the sphere). :func:`flight_gaps` measures the gap from the body to mapped
 boxes (each grown in plan by its mapping margin, :mod:`planner.map_uncertainty`); :func:`flight_dilate`
 closes the cells near obstacle cells (their cubes), the same body.
@@ -32,8 +33,8 @@ from planner.map_uncertainty import margins
 
 
 def _body(robot: Any) -> tuple[float, float]:
-    """``(radius, height)`` [m] of the flying body."""
-    return float(robot.flying_radius), float(robot.height)
+    """``(radius, height)`` [m] of the flying body (``robot.flying_height``: 0 for the sphere alone)."""
+    return float(robot.flying_radius), float(getattr(robot, "flying_height", 0.0))
 
 
 def flight_gaps(objects: Sequence[SceneObject], axes: tuple[np.ndarray, np.ndarray, np.ndarray], robot: Any,
@@ -54,7 +55,7 @@ def flight_gaps(objects: Sequence[SceneObject], axes: tuple[np.ndarray, np.ndarr
         rxy = math.hypot(w, l) / 2 + pad + r + reach
         ix = np.nonzero(np.abs(xs - cx) <= rxy)[0]
         iy = np.nonzero(np.abs(ys - cy) <= rxy)[0]
-        iz = np.nonzero((zs >= lo - height - reach) & (zs <= hi + r + reach))[0]
+        iz = np.nonzero((zs >= lo - max(height, r) - reach) & (zs <= hi + r + reach))[0]
         if ix.size == 0 or iy.size == 0 or iz.size == 0:
             continue
         gx, gy = np.meshgrid(xs[ix], ys[iy], indexing="ij")

@@ -314,7 +314,7 @@ class PlanningGrid:
         else:
             r2, dz = self.robot.flying_radius ** 2 + 1e-9, zs[None, None, :] - p[2]
             plan = (xs[:, None, None] - p[0]) ** 2 + (ys[None, :, None] - p[1]) ** 2
-            out[:] = (plan + dz ** 2 <= r2) | ((plan <= r2) & (dz >= 0) & (dz <= self.robot.height + 1e-9))
+            out[:] = (plan + dz ** 2 <= r2) | ((plan <= r2) & (dz >= 0) & (dz <= self.robot.flying_height + 1e-9))
         out[cell] = True
         return out
 
@@ -465,7 +465,8 @@ def build_grid(
     reason = np.zeros(ws.shape, dtype=np.uint8)
     danger, axes, reach_w = np.zeros(ws.shape, dtype=bool), ws.axes(), rb.radius + danger_band
     # air: the flying body; objects close within their mapping margin, the danger band ends as from the mapped box
-    air, air_dear, walk, walk_dear = object_cells(objs, axes, rb, danger_band, margins(objs), ws.floor)
+    pads = margins(objs) if rb.mapping_margin else [0.0] * len(objs)
+    air, air_dear, walk, walk_dear = object_cells(objs, axes, rb, danger_band, pads, ws.floor)
     reason[air | flight_dilate(cell_obst, rb, res)] = Closed.CLEARANCE
     danger |= air_dear | flight_dilate(cell_obst, rb, res, danger_band)
     # ground layer: the walking cylinder

@@ -38,6 +38,7 @@ import numpy as np
 from scipy import ndimage
 
 from planner.cspace import box_distance, object_distances
+from planner.map_uncertainty import margins
 from planner.grid import CellState, Closed, PlanningGrid
 
 OBSTACLE_CELLS = (Closed.UNLABELLED, Closed.SURFACE, Closed.BENEATH)
@@ -198,7 +199,8 @@ def landing_mask(grid: PlanningGrid, forced: bool = False, clear: bool = False) 
         bad |= ndimage.binary_dilation(unseen, structure=disk)
     objs = [o for o in grid.objects if o.frame == "world"]
     if objs:
-        d2, _ = object_distances(objs, ws.axes(), grid.robot.radius, z_band=_band(grid))
+        pads = margins(objs) if getattr(grid.robot, "mapping_margin", False) else None
+        d2, _ = object_distances(objs, ws.axes(), grid.robot.radius, z_band=_band(grid), pads=pads)
         bad |= d2 <= grid.robot.radius + 1e-9
     ground = grid.state[:, :, 0]
     if not forced:

@@ -6,7 +6,7 @@ cell centres and gives, with the object's mapping margin ``pad`` (:mod:`planner.
 - **walking** (the floor layer; objects overlapping the body's height above the floor): closed where the
   footprint grown by ``pad`` comes within ``robot.radius`` of the column's centre, dear (the danger band)
   where the mapped footprint comes within ``robot.radius + band``;
-- **flying** (every layer; :mod:`planner.flight_body`: the flying-radius sphere and the body's height
+- **flying** (every layer; :mod:`planner.flight_body`: the flying-radius sphere and ``robot.flying_height``
   above the origin): closed where the body meets the box grown by ``pad`` in plan, dear where it comes
   within ``band`` of the mapped box.
 
@@ -41,7 +41,8 @@ def object_cells(objects: Sequence[SceneObject], axes: tuple[np.ndarray, np.ndar
     xs, ys, zs = (np.asarray(a, dtype=np.float64) for a in axes)
     if len(pads) != len(objects):
         raise ValueError(f"pads: expected one per object ({len(objects)}), got {len(pads)}")
-    rw, rf, height = float(robot.radius), float(robot.flying_radius), float(robot.height)
+    rw, rf, walk_h = float(robot.radius), float(robot.flying_radius), float(robot.height)
+    height = float(getattr(robot, "flying_height", 0.0))
     shape = (len(xs), len(ys), len(zs))
     air_closed, air_dear = np.zeros(shape, bool), np.zeros(shape, bool)
     walk_closed, walk_dear = np.zeros(shape[:2], bool), np.zeros(shape[:2], bool)
@@ -59,10 +60,10 @@ def object_cells(objects: Sequence[SceneObject], axes: tuple[np.ndarray, np.ndar
         across = np.maximum(np.abs(-s * dx + c * dy) - w / 2, 0.0)
         plan = np.hypot(along, across)  # footprint distance in plan [m], as mapped
         grown = np.maximum(plan - pad, 0.0)
-        if lo < floor + height and hi > floor:  # overlaps the walking body's height
+        if lo < floor + walk_h and hi > floor:  # overlaps the walking body's height
             walk_closed[sx, sy] |= grown <= rw + TOL
             walk_dear[sx, sy] |= plan <= rw + band + TOL
-        sz = _contiguous((zs >= lo - height - band) & (zs <= hi + rf + band))
+        sz = _contiguous((zs >= lo - max(height, rf) - band) & (zs <= hi + rf + band))
         if sz is None:
             continue
         z = zs[sz][None, None, :]

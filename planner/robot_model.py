@@ -5,8 +5,8 @@ check, own cells, viewpoints, the workspace's edge: :func:`planner.cspace.edge_c
 Frames and units: world frame (z up), metres, radians. The robot walking is a vertical cylinder
 of :attr:`RobotModel.radius` around its origin from the floor up to :attr:`RobotModel.height`; in
 the air it is a sphere of :attr:`RobotModel.flying_radius` around its origin (the propellers'
-disc with a safety margin, taken round for simplicity) and the vertical cylinder of that radius
-from the origin up to :attr:`RobotModel.height` (the body above it: :mod:`planner.flight_body`).
+disc with a safety margin, taken round for simplicity) and, with :attr:`RobotModel.flying_height`,
+the vertical cylinder of that radius from the origin up to that height (:mod:`planner.flight_body`).
 
 MorphoGear's defaults (:data:`MORPHOGEAR`). The paper (``morphonavi-paper.tex``, "MorphoGear:
 Aerial-Ground Robot") names the robot, its hardware and its camera but gives **no dimensions**; the
@@ -40,10 +40,14 @@ class RobotModel:
     Attributes:
         radius: Footprint radius when walking [m]: no walking route passes closer to an obstacle.
         height: Height of the walking body [m]: the space up to it over a walked cell must be free.
-        flying_radius: Radius in the air [m]: no flight passes closer to an obstacle (the body's
-            ``height`` above the origin is kept clear too).
+        flying_radius: Radius in the air [m]: no flight passes closer to an obstacle.
         camera_height: Camera height above the floor when standing [m] (viewpoints).
         camera_half_vfov: Half the camera's vertical field of view [rad] (viewpoints).
+        flying_height: Height above its origin [m] the flying body keeps clear (:mod:`planner.flight_body`;
+            0: the flying-radius sphere only, the default until the look chain is tuned for it; the
+            simulator's body is 0.45 m tall).
+        mapping_margin: Grow mapped objects by their mapping margin (:mod:`planner.map_uncertainty`;
+            off by default until the look chain is tuned for it).
     """
 
     radius: float = 0.35
@@ -51,10 +55,15 @@ class RobotModel:
     flying_radius: float = 0.35
     camera_height: float = 0.35
     camera_half_vfov: float = 0.42
+    flying_height: float = 0.0
+    mapping_margin: bool = False
 
     def __post_init__(self) -> None:
+        if not isinstance(self.mapping_margin, bool):
+            raise RobotModelError(f"robot.mapping_margin: must be true or false, got {self.mapping_margin!r}")
         for name, lo, hi in (("radius", 0.0, 5.0), ("height", 0.0, 5.0), ("flying_radius", 0.0, 5.0),
-                             ("camera_height", 0.0, 5.0), ("camera_half_vfov", 0.0, math.pi / 2)):
+                             ("camera_height", 0.0, 5.0), ("camera_half_vfov", 0.0, math.pi / 2),
+                             ("flying_height", 0.0, 5.0)):
             v = getattr(self, name)
             if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
                 raise RobotModelError(f"robot.{name}: must be a finite number, got {v!r}")

@@ -290,7 +290,7 @@ class Route:
                 extra = f" and {pad:.2f} m for where it may really be (2 sigma of its mapped place)" if pad > 0 else ""
                 body = ""
                 if not flat and dist > r + pad + 1e-9:  # only the body's height above the cell reaches it
-                    body = f"; the robot's {g.robot.height:.2f} m body above that cell reaches it"
+                    body = f"; the robot's {g.robot.flying_height:.2f} m body above that cell reaches it"
                 return (f"{here} is {near} {obj.label} '{obj.id}' (its cell centre {_fmt(centre)}: {dist:.2f} m); "
                         f"the robot needs {r:.2f} m around it (its radius){extra}{body}: choose a point further away"), None
             if self._near_unknown(c):

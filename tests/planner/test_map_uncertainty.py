@@ -14,7 +14,10 @@ from console.link.world_file import load_world
 from pipeline.scene import SceneObject, Sighting, Source
 from planner.grid import CellState, Closed, Workspace, build_grid
 from planner.map_uncertainty import K_SIGMA, MARGIN_CAP, object_margin, position_sigma, yaw_sigma
+from planner.robot_model import MORPHOGEAR, RobotModel
 from planner.route import Route
+
+SURE = RobotModel(mapping_margin=True)  # the robot model with the mapping margin on (off by default)
 
 GAP_LINE = Path(__file__).resolve().parents[2] / "examples" / "worlds" / "gap_line.world.json"
 
@@ -50,9 +53,9 @@ def test_a_noisy_mapped_box_closes_cells_the_exact_one_leaves_open() -> None:
     sofa = _sofa()
     x = 2.5 + 1.0 + 0.35 + 0.08  # 8 cm beyond the robot's radius from the sofa's end, on its axis
     cell = ws.cell_of((x, 4.0, 0.0))
-    exact = build_grid([sofa], ws)
+    exact = build_grid([sofa], ws, robot=SURE)
     assert exact.state_at(cell) is not CellState.OCCUPIED
-    noisy = build_grid([_seen(sofa, 0.08, math.radians(3))], ws)  # margin 2 * hypot(0.08, 1.10 * 0.052) = 0.20 m
+    noisy = build_grid([_seen(sofa, 0.08, math.radians(3))], ws, robot=SURE)  # margin 2 * hypot(0.08, 1.10 * 0.052) = 0.20 m
     assert noisy.state_at(cell) is CellState.OCCUPIED and noisy.reason_at(cell) == Closed.CLEARANCE
     assert noisy.owner_of(cell) == "sofa-1"
     for beyond in (0.2, 0.3):  # the danger band still ends 0.25 m beyond the radius from the mapped box
@@ -67,7 +70,7 @@ def test_a_noisy_mapped_box_closes_cells_the_exact_one_leaves_open() -> None:
 
 def test_the_goal_refusal_names_the_margin() -> None:
     ws = Workspace(resolution=0.1)
-    grid = build_grid([_seen(_sofa(), 0.08, math.radians(3))], ws)
+    grid = build_grid([_seen(_sofa(), 0.08, math.radians(3))], ws, robot=SURE)
     res = Route(grid, (0.5, 0.5, 0.0)).plan((0.5, 0.5, 0.0), (2.5 + 1.0 + 0.35 + 0.08, 4.0, 0.0))
     assert not res.ok
     assert "sofa 'sofa-1'" in res.message and "0.20 m for where it may really be" in res.message
@@ -87,10 +90,17 @@ def test_the_13_m_gap_still_plans_on_foot_and_the_05_m_one_never(sigma, yaw, n) 
     """The gap_line world's 1.3 m gap (x 3.2..4.53) leaves its middle cell 0.65 m from both sides: open
     for the robot's 0.35 m radius with any margin up to the cap; the 0.5 m gap is closed either way."""
     objs, ws = _gap_line(sigma, yaw, n)
-    grid = build_grid(objs, ws)
+    grid = build_grid(objs, ws, robot=SURE)
     row = ws.cell_of((0.0, 3.5, 0.0))[1]
     xs = ws.axes()[0]
     open_x = [float(xs[i]) for i in range(len(xs)) if grid.state[i, row, 0] != CellState.OCCUPIED]
     assert open_x and all(3.2 < x < 4.53 for x in open_x)
     res = Route(grid, (3.0, 0.7, 0.0)).plan((3.0, 0.7, 0.0), (3.9, 5.0, 0.0))
     assert res.ok and bool(np.all(res.cells[:, 2] == 0)), res.message  # walks through the gap
+
+
+def test_the_default_robot_keeps_no_mapping_margin() -> None:
+    ws = Workspace(resolution=0.1)
+    cell = ws.cell_of((2.5 + 1.0 + 0.35 + 0.08, 4.0, 0.0))
+    assert not MORPHOGEAR.mapping_margin
+    assert build_grid([_seen(_sofa(), 0.08, math.radians(3))], ws).state_at(cell) is not CellState.OCCUPIED
