@@ -389,8 +389,12 @@ def cmd_calibrate(args: argparse.Namespace) -> int:
 
     if args.min_views < 1:
         raise _UserError(f"--min-views: must be at least 1, got {args.min_views}")
+    from console.cli.input_files import check_input_file
     from console.cli.outputs import InputFolder, check_output, write_error
 
+    for photo in args.photos:  # the arguments first; another MorphoNavi file is named as what it is
+        if photo.is_file():
+            check_input_file(photo, "photo")
     inputs: list[Any] = [InputFolder("photo", p, PHOTO_SUFFIXES) if p.is_dir() else ("photo", p) for p in args.photos]
     out = check_output(args.out, inputs, example="camera.toml")
     if out.suffix.lower() in PHOTO_SUFFIXES:

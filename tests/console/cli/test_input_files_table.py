@@ -42,6 +42,7 @@ FILE_READERS: dict[str, tuple[str, str, Argv]] = {  # case: (command, option or 
     "search --world": ("search", "--world", lambda p, t: ["search", "--target", "robot dog", "--world", str(p)]),
     "replay": ("replay", "", lambda p, t: ["replay", str(p), "--port", "0"]),
     "map": ("map", "", lambda p, t: ["map", str(p), "--out", str(t / "s.json")]),
+    "calibrate": ("calibrate", "", lambda p, t: ["calibrate", str(p), "--out", str(t / "c.toml")]),
     "map --camera-file": ("map", "", lambda p, t: ["map", str(PNG), "--camera-file", str(p),
                                                             "--out", str(t / "s.json")]),
     "map --catalog": ("map", "--catalog", lambda p, t: ["map", str(PNG), "--catalog", str(p),
@@ -87,12 +88,13 @@ def test_every_file_reader_refuses_every_bad_file_naming_it(tmp_path: Path, caps
     command, option, argv = FILE_READERS[case]
     p = _bad_file(tmp_path, bad)
     err = _refused(capsys, argv(p, tmp_path), command)
-    assert f"{option} {p}" in err if option else str(p) in err, err  # the argument the user gave, first
+    named = f"{option} {p}" if option else str(p) if case != "calibrate" else p.name  # calibrate: photo's name
+    assert named in err, err  # the argument the user gave, first
     if case == "map --camera-file" and bad == "missing":
         assert "camera file not found" in err
     said = BAD[bad][2]
-    if bad == "folder":
-        assert "folder" in err or "directory" in err, err
+    if bad == "folder":  # calibrate reads a folder's photos: an empty one has none
+        assert "folder" in err or "directory" in err or err.startswith("morphonavi calibrate: error: no photos"), err
     elif said:
         assert said in err, err
     assert not (tmp_path / "m.json").exists() and not (tmp_path / "s.json").exists()
