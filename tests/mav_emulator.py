@@ -147,6 +147,8 @@ class ArduCopterEmulator(CopterPhysics, VehicleEvents, VehicleCommands):
         self.prearm_failure: str | None = None
         self.reason_after_ack = False
         self.foreign_acks: dict[int, int] = {}  # command -> result also sent to another GCS (254/190) first
+        self.ack_delays: dict[int, list[float]] = {}  # command -> delays [s] of its next ACKs (one per ACK)
+        self.late_acks: list[tuple[float, int, int, tuple[int, int]]] = []  # (due, command, result, to)
         self.gcs_blocked_modes: set[str] = set()  # FLTMODE_GCSBLOCK
         self.ekf_ready = True
         self.message_interval_supported = True
@@ -302,6 +304,7 @@ class ArduCopterEmulator(CopterPhysics, VehicleEvents, VehicleCommands):
                     self._handle_queue()
                 self._step(now - last)
                 self._send_duplicates()
+                self._send_late_acks(now)
             last = now
             if now >= next_hb:
                 next_hb = now + 1.0 / self.heartbeat_rate

@@ -27,6 +27,7 @@ Frames: local NED [m]; speeds [m/s].
 from __future__ import annotations
 
 import math
+import time
 from typing import Any
 
 from pymavlink import mavutil
@@ -58,16 +59,32 @@ class VehicleCommands:
     pos: list[float]
     record: Any
     params: dict[str, float]
+    ack_delays: dict[int, list[float]]
+    late_acks: list[tuple[float, int, int, tuple[int, int]]]
 
     def _ack(self, command: int, result: int, confirmation: int, to: tuple[int, int] | None = None) -> None:
         """One COMMAND_ACK addressed (MAVLink 2) to the command's sender (default: the last requester)."""
         target = to or getattr(self, "_requester", (0, 0))
         if to is None:
             self.record.commands.append((command, confirmation, result))
+            delays = self.ack_delays.get(command)
+            if delays:  # this answer travels late (a slow or congested link): sent by the loop when due
+                self.late_acks.append((time.monotonic() + delays.pop(0), command, result, target))
+                return
+        self._ack_now(command, result, target)
+
+    def _ack_now(self, command: int, result: int, target: tuple[int, int]) -> None:
         if _ack_has_target():
             self._send("command_ack_send", command, result, 0, 0, target[0], target[1])
         else:  # MAVLink 1 has no target fields: an ACK cannot say whom it answers
             self._send("command_ack_send", command, result)
+
+    def _send_late_acks(self, now: float) -> None:
+        """Send the delayed COMMAND_ACKs that are due (``ack_delays``), in the order they were decided."""
+        due = [a for a in self.late_acks if a[0] <= now]
+        self.late_acks[:] = [a for a in self.late_acks if a[0] > now]
+        for _, command, result, target in due:
+            self._ack_now(command, result, target)
 
     def _command(self, m: Any) -> None:
         cmd, conf = int(m.command), int(m.confirmation)

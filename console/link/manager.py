@@ -396,7 +396,7 @@ class MissionManager(SafetyMixin):
         with self._cond:
             self._run = run
         epoch, resets = self._state().link_epoch, self._state().estimator_resets
-        deadline = time.monotonic() + self._deadline(part)
+        watchdog = self._watchdog(part, what)
         while not run.done:
             st = self._state()
             self._check_workspace(st)
@@ -415,7 +415,7 @@ class MissionManager(SafetyMixin):
                 if is_main:
                     self._resume_point = original_index(mission.segments[index], part, run.next_waypoint)
                 return self._took_control(run, what, taken)
-            if time.monotonic() > deadline:
+            if watchdog.overran(run.progress):
                 if is_main:
                     self._resume_point = original_index(mission.segments[index], part, run.next_waypoint)
                 return self._stop_paused(run, f"{what} overran its deadline of {self._deadline(part):.0f} s "

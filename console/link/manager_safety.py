@@ -18,7 +18,10 @@
   (:meth:`take_control`, which says first what the vehicle is doing);
 - estimator trust: a position jump or estimator fault during a segment holds and pauses;
 - flight outside the mission's workspace (an RTL climbing above it) is warned about;
-- every link segment has a watchdog deadline from its length and ``watchdog_speeds``;
+- every link segment has a watchdog deadline from its length and ``watchdog_speeds``; when it passes
+  while the robot still closes in (slower than those speeds: a vehicle flying its own speed), it moves to
+  the time the rest takes at the measured closing speed, the rule of the MAVLink link's own time-outs
+  (:mod:`~console.link.closing_speed`); a robot that stopped closing in is held and the mission paused;
 - before a segment the manager waits (up to ``ready_timeout``) for a valid position.
 
 Positions are world frame [m]; times [s].
@@ -34,6 +37,7 @@ import numpy as np
 from planner.mission import MissionSegment, SegmentKind
 
 from console.link.base import LinkError, Mode, RobotState, RunStatus, SegmentRun
+from console.link.closing_speed import ClosingTrack
 
 FRESH_WAIT = 2.0
 """How long [s] a failsafe waits, once heartbeats return, for fresh telemetry before acting on staleness."""
@@ -86,6 +90,11 @@ class SafetyMixin:
             t = horizontal / fly + up_down / vertical
         extra = self.ready_timeout if part.kind is SegmentKind.TAKEOFF else 0.0
         return t * self.watchdog_factor + self.watchdog_slack + extra
+
+    def _watchdog(self, part: MissionSegment, what: str) -> "SegmentWatchdog":
+        """The watchdog of one link segment (deadline :meth:`_deadline` from now)."""
+        return SegmentWatchdog(self._deadline(part), float(part.length), self.watchdog_factor, self.watchdog_slack,
+                               lambda text: self._emit("warning", f"{what}: {text}"))
 
     def _stop_paused(self, run: SegmentRun, why: str) -> str:
         """Hold the robot and pause the mission with ``why``; returns ``paused``."""
@@ -277,4 +286,39 @@ class SafetyMixin:
                    status=self._status_enum.PAUSED)
 
 
-__all__ = ["SafetyMixin"]
+class SegmentWatchdog:
+    """A segment's deadline that follows the measured closing speed once it has passed.
+
+    Args:
+        seconds: Time allowed from now [s] (from the segment's length and ``watchdog_speeds``).
+        length: The segment's path length [m]; the remaining distance is ``(1 - progress) x length``.
+        factor, slack: ``watchdog_factor`` and ``watchdog_slack`` of the later deadline
+            (:meth:`~console.link.closing_speed.ClosingTrack.later_deadline`).
+        warn: Told once when the deadline first follows the measured speed.
+    """
+
+    def __init__(self, seconds: float, length: float, factor: float, slack: float, warn: Any) -> None:
+        self.deadline = time.monotonic() + seconds
+        self.length, self.factor, self.slack, self.warn = length, factor, slack, warn
+        self.track = ClosingTrack()
+        self.extended = False
+
+    def overran(self, progress: float) -> bool:
+        """Record ``progress`` (0..1) now; True once the deadline has passed and the robot no longer closes
+        in (a later deadline from the measured closing speed otherwise)."""
+        now = time.monotonic()
+        self.track.add(now, (1.0 - progress) * self.length)
+        if now <= self.deadline:
+            return False
+        later = self.track.later_deadline(now, self.factor, self.slack)
+        if later is None:
+            return True
+        self.deadline, closing = later
+        if not self.extended:
+            self.extended = True
+            self.warn(f"the robot moves at {closing:.2f} m/s, slower than the watchdog expected: its deadline "
+                      "follows the measured speed")
+        return False
+
+
+__all__ = ["SafetyMixin", "SegmentWatchdog"]

@@ -8,6 +8,17 @@ after the command was first sent and no later than ``nack_window`` after the ref
 sends ``Arm: Need Position Estimate`` just after the ACK). A command is never re-sent more than
 ``max_age`` seconds after it was decided, so nothing goes out late after a link outage.
 
+Late ACKs: COMMAND_ACK carries no sequence number (only the command id; ArduPilot does not echo
+``confirmation``), so the ACK of a re-sent copy that arrives after its command has ended would be read
+as the answer to the next command of the same id (a stale ACCEPTED hiding a refusal). As QGroundControl
+does (one command of an id on the wire at a time), the copies an ended command left unanswered are
+*owed* ACKs: the vehicle answers in the order it receives, so the first ACKs of that id read after the
+next command was sent (within the retry window, ``(retries + 1) x ack_timeout``, at most ``max_age``,
+from the last copy) answer those copies and are dropped (``stats["late_acks"]``). An owed ACK that was
+lost costs the next command one ``ack_timeout`` (its own answer is dropped in its place; the re-send is
+answered), never a wrong answer. Only a command that was re-sent or ended without its ACK leaves ACKs
+owed.
+
 Mode authority: every mode command, arming, take-off and target first checks that the vehicle is
 still in the console's control (:class:`~console.link.mavlink_authority.ModeAuthority`); a vehicle that
 switched mode by itself gets nothing (:class:`~console.link.mavlink_authority.VehicleInControl`).
@@ -94,6 +105,7 @@ class Commander:
         self.bad_signatures: Callable[[], int] = lambda: transport.bad_signatures
         self.controller = "other"  # "pos", "vel" or "other" (after a mode change, a take-off)
         self.controller_changes = 0  # entries into position control
+        self._owed: dict[int, tuple[int, float]] = {}  # command -> (ACKs owed to ended copies, drain until)
 
     def check_control(self, what: str) -> None:
         '''Raise VehicleInControl if the vehicle switched to a mode the console did not command.'''
@@ -126,7 +138,25 @@ class Commander:
             comp = component
         p = list(params) + [0.0] * (7 - len(params))
         attempts = (self.retries if retries is None else retries) + 1
+        with self.tel.lock:
+            owed = list(self._owed.pop(command, (0, 0.0)))  # [ACKs owed to an earlier command, until]
         sent_at = time.monotonic()
+        counts = [0, 0, sent_at]  # copies sent, ACKs read, last send [monotonic s]
+        try:
+            self._handshake(mav, command, p, what, verify, cancel, sys_id, comp, attempts, sent_at, counts, owed)
+        finally:
+            sent, answered, last_sent = counts
+            if sent > answered:  # ACKs owed: dropped when they come after the next command of this id
+                window = min(self.max_age, (self.retries + 1) * self.ack_timeout)
+                with self.tel.lock:
+                    self._owed[command] = (sent - answered, last_sent + window)
+
+    def _handshake(self, mav: Any, command: int, p: list[float], what: str, verify: Callable[[], bool] | None,
+                   cancel: threading.Event | None, sys_id: int, comp: int, attempts: int, sent_at: float,
+                   counts: list[Any], owed: list[Any]) -> None:
+        """The send / wait / re-send loop of :meth:`command`; ``counts`` = [copies sent, ACKs read, last send
+        [monotonic s]] for the ACKs left owed; ``owed`` = [ACKs owed to an earlier command of this id, until
+        [monotonic s]]: the first ones read are theirs."""
         sent = 0
         for attempt in range(attempts):
             if cancel is not None and cancel.is_set():
@@ -134,13 +164,18 @@ class Commander:
             if attempt and time.monotonic() - sent_at > self.max_age:
                 break  # too old to send now: the situation it was decided for has passed
             with self.tel.lock:
-                self.tel.acks.pop(command, None)
+                early = self.tel.acks.pop(command, None)
+                if early is not None and not self._late(early, owed):  # a late answer to an earlier copy
+                    counts[1] += 1
             if attempt:
                 self.stats["retries"] = self.stats.get("retries", 0) + 1
                 log.info("%s: no COMMAND_ACK, retry %d/%d", what, attempt, attempts - 1)
             self.transport.send("command_long_send", sys_id, comp, command, attempt, *p)
             sent += 1
-            ack = self._wait_ack(command, cancel)
+            counts[0], counts[2] = sent, time.monotonic()
+            ack = self._wait_ack(command, cancel, owed)
+            if ack is not None:
+                counts[1] += 1
             if ack is None:
                 if verify is not None and verify():
                     return
@@ -172,12 +207,25 @@ class Commander:
                     "our commands: use the vehicle's key")
         return ""
 
-    def _wait_ack(self, command: int, cancel: threading.Event | None) -> tuple[Any, float] | None:
+    def _late(self, ack: tuple[Any, float], owed: list[Any]) -> bool:
+        """Whether ``ack`` answers a copy of an earlier command of this id (and is dropped); counts it."""
+        if owed[0] <= 0 or ack[1] > owed[1] or ack[0].result == mavutil().mavlink.MAV_RESULT_IN_PROGRESS:
+            return False
+        owed[0] -= 1
+        self.stats["late_acks"] = self.stats.get("late_acks", 0) + 1
+        log.info("late COMMAND_ACK for command %d dropped: it answers an earlier command's copy",
+                 int(ack[0].command))
+        return True
+
+    def _wait_ack(self, command: int, cancel: threading.Event | None,
+                  owed: list[Any] | None = None) -> tuple[Any, float] | None:
         mav = mavutil().mavlink
         deadline = time.monotonic() + self.ack_timeout
         with self.tel.lock:
             while True:
                 ack = self.tel.acks.pop(command, None)
+                if ack is not None and owed is not None and self._late(ack, owed):
+                    ack = None
                 if ack is not None and ack[0].result == mav.MAV_RESULT_IN_PROGRESS:
                     deadline = time.monotonic() + self.ack_timeout
                     ack = None
