@@ -29,6 +29,7 @@ from console.app import ConsoleApp, ConsoleConfig, wait_until
 from console.session.mapping_job import JOB_NAME
 from console.views.objects_view import NONE_CHOICE
 from console.views.picking import ray_plane, top_view
+from tests.console.e2e.e2e_helpers import click_until
 from tests.console.e2e.test_console_e2e import BROWSER_ARGS, CHROMIUM, VIEWPORT, _project, _ray_hits_box, console, needs_browser  # noqa: F401
 
 BANNER_JS = "getComputedStyle(document.body, '::before').content"
@@ -125,7 +126,8 @@ def test_goals_go_through_objects_typed_goals_top_view_and_the_disconnected_bann
             assert wait_until(lambda: len(app.server.get_clients()) == 1, 60), "the page did not connect"
             assert page.evaluate(BANNER_JS) == "none"  # connected: no banner
 
-            capture.click()
+            click_until(lambda: page.get_by_role("button", name="Capture & map"),
+                        lambda: session.job is not None and session.job.name == JOB_NAME, "Capture & map")
             assert wait_until(lambda: session.job.name == JOB_NAME and not session.job.running and session.job.fraction == 1.0, 120), session.job
             assert len(session.scene.objects) >= 10
             assert wait_until(lambda: len(app.views["objects"].drawn_ids()) == len(session.scene.objects), 30)
@@ -204,7 +206,7 @@ def test_goals_go_through_objects_typed_goals_top_view_and_the_disconnected_bann
             assert wait_until(lambda: objects.highlighted() == obj.id and objects.chooser_value() == obj.id, 60)
             chooser = page.get_by_label("Select object")
             page.wait_for_function("([el, v]) => el.value === v", arg=[chooser.element_handle(), obj.id], timeout=30_000)
-            page.get_by_role("button", name="Deselect").click()
+            click_until(lambda: page.get_by_role("button", name="Deselect"), lambda: session.selected is None, "Deselect")
             assert wait_until(lambda: session.selected is None and objects.highlighted() is None, 30)
             page.wait_for_function("([el, v]) => el.value === v", arg=[chooser.element_handle(), NONE_CHOICE], timeout=30_000)
 
@@ -216,15 +218,16 @@ def test_goals_go_through_objects_typed_goals_top_view_and_the_disconnected_bann
                 label.locator("xpath=ancestor::*[.//input][1]//input").first.fill(want[i])
                 assert wait_until(lambda: app.views["paths"].typed_values()[i] == want[i], 10), \
                     app.views["paths"].typed_values()
-            page.get_by_role("button", name="Add goal").click()
-            assert wait_until(lambda: math.dist((session.route_snapshot().candidate_goal or (9, 9, 9))[:2], typed) < 0.2, 60), \
-                session.route_snapshot().candidate_goal
+            click_until(lambda: page.get_by_role("button", name="Add goal"),
+                        lambda: math.dist((session.route_snapshot().candidate_goal or (9, 9, 9))[:2], typed) < 0.2, "Add goal",
+                        settle=60.0)
 
             # --- register, build: status and Execute in sight together at 1440 x 900 -----------------
-            page.get_by_role("button", name="Register").click()
-            assert wait_until(lambda: len(session.route_snapshot().registered) == 1, 30)
-            page.get_by_role("button", name="Build mission").click()
-            assert wait_until(lambda: session.mission is not None, 30)
+            click_until(lambda: page.get_by_role("button", name="Register"),
+                        lambda: len(session.route_snapshot().registered) == 1, "Register")
+            assert len(session.route_snapshot().registered) == 1
+            click_until(lambda: page.get_by_role("button", name="Build mission"), lambda: session.mission is not None,
+                        "Build mission")
             execute = page.get_by_role("button", name="Execute")
             execute.wait_for(timeout=10_000)
             status = page.get_by_text("link ok").first
@@ -235,15 +238,13 @@ def test_goals_go_through_objects_typed_goals_top_view_and_the_disconnected_bann
 
             page.screenshot(path=str(tmp_path / "mission_built.png"))
             # --- top view: straight down; a click still lands on the floor ------------------------------
-            page.get_by_role("button", name="Top view").click()
-
             above, _, _ = top_view(session.workspace, float(cam.fov), float(cam.aspect))
 
             def looks_down() -> bool:  # the client reports its camera there (after any transition)
                 return (float(_rotation(cam.wxyz)[:, 2] @ np.array([0.0, 0.0, -1.0])) > 0.999
                         and math.dist(cam.position, above) < 0.05)
 
-            assert wait_until(looks_down, 30), cam.wxyz
+            click_until(lambda: page.get_by_role("button", name="Top view"), looks_down, "Top view")
             assert session.route_snapshot().candidate_goal is None  # registered: no candidate to discard
             discard = page.get_by_role("button", name="Discard", exact=True)
             page.wait_for_function("el => el.disabled", arg=discard.element_handle(), timeout=30_000)  # off: nothing to act on
