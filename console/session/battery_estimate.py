@@ -129,10 +129,11 @@ def time_left(charge: float | None, rate: float | None, critical: float = BATTER
 
 
 def minutes_text(seconds: float) -> str:
-    """``about 3 min`` (rounded), ``less than 1 min`` below a minute."""
+    """``about 3 min`` (whole minutes, rounded down: a time left to land is never overstated),
+    ``less than 1 min`` below a minute."""
     if seconds < 60.0:
         return "less than 1 min"
-    return f"about {round(seconds / 60.0):.0f} min"
+    return f"about {math.floor(seconds / 60.0):d} min"
 
 
 def hover_text(charge: float | None, rate: float | None, critical: float = BATTERY_CRITICAL) -> str:

@@ -133,8 +133,8 @@ def test_bad_files_are_refused_with_exit_code_2(recorded: Any, tmp_path: Path, c
             cid = w.register_channel(topic, "json", sid)
             w.add_message(cid, log_time=n + 1, data=json.dumps(value).encode(), publish_time=n + 1)
         w.finish()
-    cases = {tmp_path / "missing.mcap": "no such file", truncated: "truncated", not_mcap: "not an MCAP file",
-             foreign: "not a MorphoNavi recording", tmp_path: "not a file",
+    cases = {tmp_path / "missing.mcap": "no such file", truncated: "truncated", not_mcap: r"not an MCAP file|is a photo, not a recording \(MCAP\)",  # the command names what it is
+             foreign: "not a MorphoNavi recording", tmp_path: "not a file|is a folder",
              bad_scene: "/morphonavi/scene at 2 ns: malformed .*position"}
     for bad, why in cases.items():
         assert main(["replay", str(bad), "--port", "0"]) == 2

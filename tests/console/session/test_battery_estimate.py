@@ -53,7 +53,7 @@ def test_no_estimate_before_enough_seconds_in_the_air_or_without_a_falling_charg
 def test_the_words() -> None:
     assert hover_text(0.55, 0.0025) == ("hovering: about 3 min of battery left to land (the console lands the "
                                         "robot at 10 %)")
-    assert minutes_text(45.0) == "less than 1 min" and minutes_text(150.0) == "about 2 min"
+    assert minutes_text(45.0) == "less than 1 min" and minutes_text(150.0) == "about 2 min" and minutes_text(210.0) == "about 3 min"
     assert hover_text(0.55, None) == "hovering: measuring the battery drain for a time estimate…"
     assert hover_text(None, 0.01) == "hovering: battery charge unknown, no time estimate"
     assert "the robot lands now" in hover_text(0.08, 0.01)
