@@ -281,11 +281,13 @@ class MappingJob(BackgroundRun):
         text = f"; {summary.unlabelled} unlabelled obstacle {cells}"
         if result.depth is None:
             return text + " (no depth: known space from the mapped boxes)"
-        from pipeline.mapping.known_space_update import explained_share
+        from console.session.known_space_state import DEPTH_NOISE_REL
+        from pipeline.mapping.known_space_update import DepthNoise, explained_share
 
         ws = self._session.workspace
+        noise = DepthNoise() if exact else DepthNoise(relative=DEPTH_NOISE_REL)  # the walls: as the known space's
         ex = explained_share(np.nan_to_num(np.asarray(result.depth, dtype=np.float64), nan=0.0), shot.intrinsics,
-                             shot.camera_pose, self._session.scene.objects, ws.min, ws.max)
+                             shot.camera_pose, self._session.scene.objects, ws.min, ws.max, noise=noise)
         text += f"; mapped objects explain {100 * ex.share:.0f} % of the near depth"
         if ex.low:
             self._session.notify(

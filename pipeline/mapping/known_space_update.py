@@ -324,21 +324,27 @@ class DepthExplained:
 def explained_share(depth_m: np.ndarray, intrinsics: Intrinsics, camera: Pose, objects: Sequence[SceneObject],
                     bounds_min: Sequence[float], bounds_max: Sequence[float], *, near: float = NEAR_RANGE,
                     tolerance: float = EXPLAINED_TOLERANCE, floor_band: float = FLOOR_BAND,
-                    pixel_step: int = 4) -> DepthExplained:
+                    pixel_step: int = 4, noise: DepthNoise = DepthNoise()) -> DepthExplained:
     """The share of the photo's near depth surfaces that lie in a mapped object's box grown by
     ``tolerance`` [m]; surfaces are the sampled pixels' depth points (world [m]) within ``near`` m,
-    inside ``bounds_min``..``bounds_max`` (less :data:`EDGE_TOLERANCE`: walls at the faces do not
-    count) and above the floor band. A low share (:attr:`DepthExplained.low`) means the depth
-    sees obstacles the detector did not name."""
+    inside ``bounds_min``..``bounds_max`` and above the floor band. Points on or beyond the
+    workspace's faces, within :data:`EDGE_TOLERANCE` plus the depth's ``noise`` sigma along the ray
+    (the rule of :func:`capture_update`), are the room's walls, floor and ceiling: the workspace
+    explains them, they do not count. A low share (:attr:`DepthExplained.low`) means the depth
+    sees obstacles the detector did not name. ``noise``: the depth's 1-sigma uncertainty (0 for the
+    simulator's exact depth, a depth model's relative sigma otherwise)."""
     d = np.asarray(depth_m)
     if d.ndim != 2 or d.shape != (intrinsics.height, intrinsics.width):
         raise KnownSpaceError(f"depth: must be {intrinsics.height} x {intrinsics.width}, got shape {d.shape}")
     dirs, z, cam = _sample_rays(d, intrinsics, camera, max(1, int(pixel_step)))
     keep = z <= near
     pts = cam + dirs[keep] * z[keep, None]
-    lo = np.asarray(bounds_min, dtype=np.float64) + EDGE_TOLERANCE
-    hi = np.asarray(bounds_max, dtype=np.float64) - EDGE_TOLERANCE
-    inside = np.all((pts > lo) & (pts < hi), axis=1) & (pts[:, 2] > float(bounds_min[2]) + floor_band)
+    sigma = (float(noise.absolute) + float(noise.relative) * z[keep]) * np.linalg.norm(dirs[keep], axis=1)
+    tol = (EDGE_TOLERANCE + sigma)[:, None]  # [m] per point: a wall read up to its sigma inside is a wall
+    lo = np.asarray(bounds_min, dtype=np.float64)
+    hi = np.asarray(bounds_max, dtype=np.float64)
+    inside = (np.all((pts > lo + tol) & (pts < hi - tol), axis=1)
+              & (pts[:, 2] > lo[2] + np.maximum(floor_band, tol[:, 0])))
     pts = pts[inside]
     if len(pts) == 0:
         return DepthExplained(1.0, 0, 0)
