@@ -146,6 +146,13 @@ def trust_text(r: RobotSnapshot) -> str:
     return out
 
 
+def activity_text(r: RobotSnapshot) -> str:
+    """What the robot is doing, from the vehicle's own state: its mode in plain words, except a take-off
+    before the vehicle reports its motors armed, which is ``arming`` (a take-off is shown only armed)."""
+    mode = mode_text(r.mode)
+    return "arming" if mode == "taking off" and not r.armed else mode
+
+
 def status_text(r: RobotSnapshot | None, link_name: str,
                 messages: tuple[tuple[int, str], ...] | None = None) -> str:
     """One status line for the panel (HTML); ``messages`` are the robot's messages still news
@@ -170,7 +177,7 @@ def status_text(r: RobotSnapshot | None, link_name: str,
     quality = f" · {html.escape(r.link_quality)}" if r.link_quality else ""
     said = "".join(f"<br><span style='color:{_message_color(t)}'>{html.escape(t)}</span>"
                    for _, t in (r.messages if messages is None else messages)[-MESSAGES_SHOWN:])
-    return (f"<small>robot <b>{html.escape(link_name)}</b> · {health}{quality} · {html.escape(mode_text(r.mode))} · {armed} · "
+    return (f"<small>robot <b>{html.escape(link_name)}</b> · {health}{quality} · {html.escape(activity_text(r))} · {armed} · "
             f"{battery}{stale}<br>{position_text(r)}{detail}{trust_text(r)}{said}</small>")
 
 
@@ -321,7 +328,7 @@ class RobotView:
                 self._twin.visible = status == "known"
                 self._stale_twin.visible = status == "stale"
                 self._frame.visible = True
-            text = (f"robot · {mode_text(r.mode)}" + ("" if r.healthy else " · LINK LOST")
+            text = (f"robot · {activity_text(r)}" + ("" if r.healthy else " · LINK LOST")
                     + (" · POSITION STALE" if status == "stale" else ""))
             self._label.text = text
             self._labels_follow(text, status, r.pose.translation)
