@@ -267,6 +267,9 @@ def read_json_of_kind(path: str | os.PathLike[str], expected: str, where: str = 
         raise FileKindError(f"{where}{label}: not usable JSON: nested too deeply") from None
     found = kind_of_json(data)
     if found != expected:
+        if found == "json" and not isinstance(data, dict):  # an array, a number...: no keys to name
+            raise FileKindError(f"{where}{label} is not {KINDS[expected].what}: it is {_json_value(data)}, "
+                                "not a MorphoNavi file")
         if found == "json":
             keys = ", ".join(list(data)[:6]) if isinstance(data, dict) else type(data).__name__
             raise FileKindError(f"{where}{label} is not {KINDS[expected].what}: it is JSON of no MorphoNavi "
@@ -275,6 +278,19 @@ def read_json_of_kind(path: str | os.PathLike[str], expected: str, where: str = 
                                 f"{where}{label} is not {KINDS[expected].what}: JSON of no MorphoNavi kind")
         raise FileKindError(wrong_kind(where, label, found, expected))
     return data
+
+
+def _json_value(data: Any) -> str:
+    """What a JSON document that is not an object holds, in words (``a JSON array``, ``a JSON number``)."""
+    if isinstance(data, list):
+        return "a JSON array"
+    if isinstance(data, bool):
+        return "a JSON true/false"
+    if isinstance(data, (int, float)):
+        return "a JSON number"
+    if isinstance(data, str):
+        return "a JSON string"
+    return "JSON null" if data is None else "JSON of no MorphoNavi kind"
 
 
 def check_scene_ranges(scene: Any) -> None:

@@ -36,6 +36,12 @@ MISSION_VERSION = 1
 Vec3 = tuple[float, float, float]
 
 
+
+def count_text(n: int, word: str) -> str:
+    """``n`` and ``word`` in the right number (``1 segment``, ``2 segments``): the planner's own copy of
+    ``console.wording.plural``, which it may not import (data flows pipeline -> planner -> console)."""
+    return f"{int(n)} {word if int(n) == 1 else word + 's'}"
+
 class MissionError(ValueError):
     """A malformed mission or a path that cannot become a mission."""
 
@@ -147,10 +153,10 @@ class Mission:
 
     def summary(self) -> str:
         """One line per segment, for people."""
-        lines = [f"mission {self.id}: {len(self.segments)} segments, {self.length:.2f} m"]
+        lines = [f"mission {self.id}: {count_text(len(self.segments), 'segment')}, {self.length:.2f} m"]
         for i, s in enumerate(self.segments):
             a, b = s.start, s.end
-            extra = f", {len(s.waypoints)} waypoints" if s.kind in (SegmentKind.WALK, SegmentKind.FLY) else ""
+            extra = f", {count_text(len(s.waypoints), 'waypoint')}" if s.kind in (SegmentKind.WALK, SegmentKind.FLY) else ""
             if s.kind is SegmentKind.TURN and s.yaw is not None:
                 extra = f", to heading {math.degrees(s.yaw):.0f} deg"
             lines.append(

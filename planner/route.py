@@ -29,7 +29,7 @@ from planner.astar import AStarSearcher, min_finite_cost
 from planner.clearance import crowding
 from planner.cspace import box_distance, edge_blockers, edge_gaps
 from planner.grid import Closed, CostWeights, PlanningGrid
-from planner.mission import Mission, mission_from_cells
+from planner.mission import Mission, count_text, mission_from_cells
 from planner.goal_look import next_look
 from planner.viewpoint import frontier_spot, suggest_viewpoint
 
@@ -388,7 +388,7 @@ class Route:
         cells = res.path.astype(np.int64)
         end = self._end_point(g)
         unseen, unseen_m = self.unseen_part(cells)
-        msg = f"path of {len(cells)} cells, cost {res.cost:.2f}"
+        msg = f"path of {count_text(len(cells), 'cell')}, cost {res.cost:.2f}"
         moved = math.dist(end, (float(goal[0]), float(goal[1]), float(goal[2])))
         if moved > 0.01:
             msg += f"; goal snapped to {_fmt(end)} ({moved:.2f} m away)"

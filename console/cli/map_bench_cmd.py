@@ -111,13 +111,18 @@ def _models(args: argparse.Namespace, catalog: Catalog) -> Any:
     """Load the model set ``--models`` from ``--model-dir`` (checked first, as is $MORPHONAVI_MODELS)."""
     from pipeline.models.registry import MODEL_SETS
 
-    if args.threads is not None and args.threads < 1:
-        raise _UserError(f"--threads: must be at least 1, got {args.threads}")
+    _check_threads(args)
     model_dir = check_model_dir(args.model_dir, "--model-dir")
     if args.models not in MODEL_SETS and ("/" in args.models or "\\" in args.models or Path(args.models).is_dir()):
         raise _UserError(f"--models {args.models}: --models picks a model set ({', '.join(MODEL_SETS)}); "
                          f"for a folder of model weights use --model-dir {args.models}")
     return load_mapping_models(args.models, model_dir, catalog, args.threads)
+
+
+def _check_threads(args: argparse.Namespace) -> None:
+    """``--threads`` at least 1 (a user's error otherwise, naming the option)."""
+    if args.threads is not None and args.threads < 1:
+        raise _UserError(f"--threads: must be at least 1, got {args.threads}")
 
 
 def _catalog(args: argparse.Namespace) -> Catalog:
@@ -171,6 +176,8 @@ def cmd_map(args: argparse.Namespace) -> int:
         check_input_file(args.catalog, "catalog", "--catalog")
     out = check_output(args.out, [("photo", args.image), ("camera file", args.camera), ("catalog", args.catalog)],
                        example="scene.json")
+    _check_threads(args)  # the options before any note about the photo's camera
+    catalog = _catalog(args)
     camera = _camera_file(args.camera) if args.camera is not None else None
     if camera is not None:
         from pipeline.camera.horizon import horizon_check
@@ -195,7 +202,6 @@ def cmd_map(args: argparse.Namespace) -> int:
     if not camera.mount_given:  # no [mount] / gravity_cam: fitted from the photo, never taken as level
         print("note: the camera's pitch, roll and height are not given (no [mount] in the camera file, no "
               "gravity_cam / camera_height): they are fitted from the photo's floor", file=sys.stderr)
-    catalog = _catalog(args)
     if args.prompts is not None:
         prompts_from_words(catalog, args.prompts)  # empty list -> error before loading models
     camera.intrinsics.check_image(image.shape[1], image.shape[0])

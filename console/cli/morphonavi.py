@@ -61,6 +61,7 @@ def cmd_plan(args: argparse.Namespace) -> int:
     from planner.route import Route
     from console.cli.object_goal_cli import resolve_stop
     from console.cli.plan_known import plan_grid
+    from console.session.goal_rules import zero_length
 
     from console.cli.outputs import check_output, write_error
     from pipeline.file_kind import FileKindError, load_scene_file
@@ -95,6 +96,9 @@ def cmd_plan(args: argparse.Namespace) -> int:
         raise CliError("give at least one stop: --goal x,y,z or --goal-object ID_OR_LABEL")
     for goal in args.goal:
         goal = resolve_stop(goal, scene, route)
+        why = zero_length(goal, route, grid.workspace)  # the console's rule: no 0 m mission
+        if why is not None:
+            raise CliError(f"--goal {goal[0]:g},{goal[1]:g},{goal[2]:g}: {why}")
         res = route.propose(goal)
         if not res.ok:
             raise CliError(res.message)
@@ -127,6 +131,9 @@ def cmd_models(args: argparse.Namespace) -> int:
         return 0
     if args.action == "fetch":
         return models_fetch(args.names, model_dir)
+    if model_dir is not None and not model_dir.exists():  # "no models found in it" hid the typo
+        raise CliError(f"--model-dir {args.model_dir}: the folder does not exist (fetch models into it with "
+                       "`morphonavi models fetch offline --model-dir DIR`)")
     text, code = models_verify(model_dir, args.names or None)
     print(text)
     return code

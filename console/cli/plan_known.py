@@ -17,6 +17,7 @@ from pathlib import Path
 from typing import Any
 
 from console.cli.errors import CliError
+from console.wording import plural
 
 
 def add_known_space_args(p: argparse.ArgumentParser) -> None:
@@ -82,7 +83,7 @@ def plan_grid(args: argparse.Namespace, scene: Any, ws: Any) -> tuple[Any, list[
     if known is not None:
         k = known.counts()
         lines.append(f"known space: {k['free']} seen-free, {k['occupied']} occupied, {k['unknown']} unknown cells "
-                     f"({known.resolution:g} m); {grid.unlabelled} unlabelled obstacle cells")
+                     f"({known.resolution:g} m); {plural(grid.unlabelled, 'unlabelled obstacle cell')}")
         if grid.floating:
             lines.append("floor closed beneath objects mapped floating (not seen free): " + ", ".join(grid.floating))
     return grid, lines

@@ -50,7 +50,7 @@ import numpy as np
 
 from planner.mission import Mission, MissionSegment, SegmentKind
 
-from console.wording import kind_text  # plain words (take-off), no UI
+from console.wording import kind_text, plural  # plain words (take-off), no UI
 from console.link.base import LinkError, RobotLink, RobotState, RunStatus, SegmentRun
 from console.link.manager_resume import original_index, segment_parts
 from console.link.manager_safety import SafetyMixin
@@ -230,7 +230,7 @@ class MissionManager(SafetyMixin):
             self._progress = MissionProgress(MissionStatus.RUNNING, mission.id, 0, len(mission.segments),
                                              mission.segments[0].kind)
             self._thread = threading.Thread(target=self._work, args=(mission,), name="mission", daemon=True)
-        self._emit("info", f"mission {mission.id} started: {len(mission.segments)} segments, {mission.length:.1f} m")
+        self._emit("info", f"mission {mission.id} started: {plural(len(mission.segments), 'segment')}, {mission.length:.1f} m")
         self._thread.start()
 
     def pause(self) -> None:
