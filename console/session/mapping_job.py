@@ -29,6 +29,7 @@ from pipeline.scene import Scene
 from console.link.base import CaptureResult
 from console.session.job_thread import BackgroundRun
 from console.session.model_preload import ModelPreload
+from console.session.pinned_notes import pinned_far, pinned_views
 
 from console.session.session import CaptureRecord, Detection, JobStatus, Session, SessionError
 from console.session.session_types import MappingError
@@ -222,8 +223,8 @@ class MappingJob(BackgroundRun):
             ))
             # the fusion is pure: a dry run against the map says what will happen to each object and
             # whether the capture agrees with the map at all (the session's merge never holds back)
-            ws = self._session.workspace
-            _, preview = fuse(self._session.scene, result.scene, bounds=(ws.min, ws.max))
+            ws, mapped = self._session.workspace, self._session.scene
+            _, preview = fuse(mapped, result.scene, bounds=(ws.min, ws.max))
             if preview.held_back:
                 with self._lock:
                     self._held = (result.scene, cap_id)
@@ -237,15 +238,19 @@ class MappingJob(BackgroundRun):
                                          if drop else result.scene, origin=f"capture {cap_id}")
             known = self._observe_known(cap_id, shot, result)  # the known space, one undo step with the capture
             dt = time.perf_counter() - t0
-            rejected = preview.rejected
+            rejected, pinned = preview.rejected, len(pinned_views(preview))  # pinned: seen again, not moved
             summary = (f"{n} objects seen ({len(report.added)} new, {len(report.updated)} updated"
+                       + (f", {pinned} kept pinned" if pinned else "")
                        + (f", {len(rejected)} not used" if rejected else "") + f") in {dt:.1f} s")
+            far = pinned_far(preview, result.scene, mapped)  # a pinned object the capture sees elsewhere
             dropped = ("; not used: " + "; ".join(f"{o.label} ({o.reason})" for o in rejected)) if rejected else ""
             # a close-up drops only what it cannot range: each one and why stays on the panel
-            self._session.set_job(JobStatus(name, False, 1.0, summary + dropped + known))
-            notes = preview.notes() + list(report.notes)
+            self._session.set_job(JobStatus(name, False, 1.0, summary + "".join(f"; {f}" for f in far) + dropped + known))
+            notes = far + preview.notes() + list(report.notes)
             body = summary + ("; " + "; ".join(notes) if notes else "")
-            self._session.notify("Mapped", body, "warning" if rejected else "success")
+            self._session.notify("Mapped", body, "warning" if rejected or far else "success")
+            if far:  # its own notice, shown whole: the Mapped one may show only its counts
+                self._session.notify("Pinned object seen elsewhere", "; ".join(far), "warning")
             from pipeline.camera.pose_check import floor_check
 
             for warning in floor_check(result.scene):  # objects under the floor / floating: a wrong camera pose

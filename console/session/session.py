@@ -46,7 +46,7 @@ from pipeline.scene import SceneError, check_plausible
 from console.session.capture_files import CAPTURE_DIR
 from console.session.history import History, Undo
 from console.session.known_space_state import KnownSpaceSession
-from console.session import goal_rules, mission_rules
+from console.session import edit_rules, goal_rules, mission_rules
 from console.session.merge import merge_observations, merge_report
 from console.session.object_follow import ObjectFollow
 from console.session.operator_session import OperatorRules
@@ -339,7 +339,10 @@ class Session(SessionReads, Persistence, Undo, OperatorRules, KnownSpaceSession,
         return notes
 
     def move_object(self, object_id: str, position: Sequence[float], yaw: float | None = None) -> list[str]:
-        """Put an object at ``position`` (box centre, world [m]) and heading ``yaw`` [rad]."""
+        """Put an object at ``position`` (box centre, world [m]) and heading ``yaw`` [rad].
+
+        Refused (:class:`SessionError`, nothing changed) where its box would overlap the robot's body
+        (:func:`console.session.edit_rules.check_clear_of_robot`)."""
         p = tuple(float(v) for v in position)
         if len(p) != 3 or not all(math.isfinite(v) for v in p):
             raise SessionError(f"position must be 3 finite numbers [m], got {position!r}")
@@ -353,7 +356,9 @@ class Session(SessionReads, Persistence, Undo, OperatorRules, KnownSpaceSession,
                 obj = self._scene.object(object_id)
             except KeyError:
                 raise SessionError(f"no object {object_id!r} in the map (was it deleted in another tab?)") from None
-            objs = [obj.moved(p, yaw) if o.id == object_id else o for o in self._scene.objects]  # type: ignore[arg-type]
+            moved = obj.moved(p, yaw)  # type: ignore[arg-type]
+            edit_rules.check_clear_of_robot(moved, edit_rules.robot_position(self._robot, self._route.start))
+            objs = [moved if o.id == object_id else o for o in self._scene.objects]
             notes = self._set_scene_locked(self._scene.with_objects(objs), f"move {object_id}")
         self._emit([(SCENE, None), (GRID, None), (ROUTE, None), (MISSION, None), (SELECTION, object_id)])
         return notes

@@ -150,6 +150,31 @@ def layer_cells(grid: PlanningGrid, state: CellState | np.ndarray, max_height: f
     return ws.centers(idx)
 
 
+def seen_free_cells(session: Any) -> int | None:
+    """Cells of the session's known space the captures saw free (``None``: no known space yet)."""
+    from pipeline.mapping.known_space import KnownState
+
+    known = getattr(session, "known_space", None)
+    return None if known is None else int((known.state() == KnownState.FREE).sum())
+
+
+def count_line(grid: PlanningGrid, masks: dict[str, np.ndarray], hidden: list[str], seen_free: int | None) -> str:
+    """The grid's count line (HTML): cells per layer of the whole grid (``masks``: :func:`layer_mask`).
+
+    ``free`` counts the grid's free cells: where the robot, at its size, may be planned (seen free space
+    too near unseen space or an obstacle for its body is not); ``seen_free`` (the known space's seen-free
+    cells) is said beside it, so a first capture's few free cells are not read as nothing seen.
+    """
+    ws = grid.workspace
+    seen = "" if seen_free is None else f" ({seen_free} seen free)"
+    return (f"<small>Grid {ws.shape[0]}×{ws.shape[1]}×{ws.shape[2]} at {ws.resolution:g} m: "
+            f"<b style='color:rgb{OCCUPIED_RGB}'>{int(masks['occupied'].sum())}</b> occupied · "
+            f"<b style='color:rgb{(180, 140, 0)}'>{int(masks['dangerous'].sum())}</b> dangerous · "
+            f"<b style='color:rgb{FREE_RGB}'>{int(masks['free'].sum())}</b> free for the robot{seen} · "
+            f"<b style='color:rgb{(110, 110, 115)}'>{int(masks['unknown'].sum())}</b> unknown"
+            + (f" ({' and '.join(hidden)} not drawn: {hidden_hint(hidden)})" if hidden else "") + "</small>")
+
+
 def hidden_hint(hidden: list[str]) -> str:
     """How to show the hidden layers ``hidden`` (names of :data:`_LAYERS`), in words."""
     boxes = " / ".join(f"<i>{name.capitalize()} cells</i>" for name in hidden)
@@ -235,7 +260,6 @@ class GridView:
             grid = self._session.grid
             ws = grid.workspace
             max_h = float(self._height.value)
-            counts = grid.counts()
             masks = {name: layer_mask(grid, name) for name, _, _, _, _ in _LAYERS}
             goal_cell = ws.cell_of((ws.min[0], ws.min[1], min(self._session.goal_height(), ws.max[2])))
             level = goal_cell[2] if goal_cell is not None else 0
@@ -268,14 +292,7 @@ class GridView:
                 )
                 self._handles[name] = handle
             hidden = [name for name in ("free", "unknown") if not self._checks[name].value]
-            self._counts.content = (
-                f"<small>Grid {ws.shape[0]}×{ws.shape[1]}×{ws.shape[2]} at {ws.resolution:g} m: "
-                f"<b style='color:rgb{OCCUPIED_RGB}'>{int(masks['occupied'].sum())}</b> occupied · "
-                f"<b style='color:rgb{(180, 140, 0)}'>{int(masks['dangerous'].sum())}</b> dangerous · "
-                f"<b style='color:rgb{FREE_RGB}'>{counts['free']}</b> free · "
-                f"<b style='color:rgb{(110, 110, 115)}'>{int(masks['unknown'].sum())}</b> unknown"
-                + (f" ({' and '.join(hidden)} not drawn: {hidden_hint(hidden)})" if hidden else "") + "</small>"
-            )
+            self._counts.content = count_line(grid, masks, hidden, seen_free_cells(self._session))
 
     def drawn_counts(self) -> dict[str, int]:
         """Instances currently drawn per layer (for tests and the status line)."""
