@@ -31,7 +31,7 @@ from planner.mission import Mission
 from planner.route import Route
 
 from console.session.capture_files import (
-    highest_capture_number, numbered_capture_id, read_capture_files, write_capture_files,
+    CAPTURE_DIR, highest_capture_number, numbered_capture_id, read_capture_files, write_capture_files,
 )
 from console.session.file_aside import put_aside
 from console.session.history_file import HISTORY_FILE, HistoryWriter, read_history_file
@@ -259,9 +259,20 @@ class Persistence(SessionCore):
         return path.name
 
     def _snapshot_path(self, name: str) -> Path:
+        """The snapshot file ``name`` names; the files the session folder holds for itself are refused,
+        whatever their case (``Session`` is ``session.json`` on a case-blind disk): the live session,
+        the undo history and anything in the captures folder."""
         path = self.resolve_name(name)
-        if path.name == HISTORY_FILE and path.parent == self.folder:
+        rel = path.relative_to(self.folder)  # resolve_name keeps names inside the (resolved) folder
+        first = rel.parts[0].lower() if rel.parts else ""
+        if len(rel.parts) == 1 and first == SESSION_FILE:
+            raise SessionError(f"{name.strip()!r} is the session itself ({SESSION_FILE}, saved after every change): "
+                               "choose another name for a snapshot")
+        if len(rel.parts) == 1 and first == HISTORY_FILE:
             raise SessionError(f"{HISTORY_FILE} holds the undo history: choose another name")
+        if len(rel.parts) > 1 and first == CAPTURE_DIR:
+            raise SessionError(f"{name.strip()!r} is inside {CAPTURE_DIR}/, where the session keeps its photos: "
+                               "choose another name")
         return path
 
     @property

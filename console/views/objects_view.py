@@ -29,7 +29,7 @@ from console.views import confirm
 from console.views.client_notice import tell
 from console.views.object_history import history_lines
 from console.views.object_labels import ClientLabels, LabelSpot
-from console.views.picking import SELECT_MODIFIER, click_intent
+from console.views.picking import SELECT_MODIFIER, click_intent, typed_number, typed_xyz
 from console.session.session import CAPTURE, SCENE, SELECTION, Session, SessionError
 from console.wording import natural_sorted, plural
 
@@ -424,8 +424,10 @@ class ObjectsView:
         if obj is None:
             tell(event.client, "Nothing selected", "click an object first (Shift-click in goal mode)", "yellow")
             return
-        try:
-            notes = self._session.move_object(obj.id, tuple(self._pos.value), math.radians(float(self._yaw.value)))
+        try:  # every field checked before anything moves: junk in one refuses the whole move, named
+            centre = typed_xyz(self._pos.value, "centre")
+            yaw = typed_number(self._yaw.value, "yaw", "deg")
+            notes = self._session.move_object(obj.id, tuple(centre), math.radians(yaw))
         except SessionError as exc:
             tell(event.client, "Cannot move", str(exc), "red")
             return

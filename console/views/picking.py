@@ -105,29 +105,41 @@ def click_intent(click_to_goal: bool, modifier: str | None, on_object: bool) -> 
     return "select" if on_object else None
 
 
+def typed_xyz(values: Sequence[Any], field: str) -> list[float]:
+    """Three typed numbers ``(x, y, z)`` [m] of the field ``field`` (``goal``, ``centre`` ...).
+
+    Raises :class:`SessionError` naming the bad one (``centre.x: must be a number [m], got 'abc'``);
+    booleans, text, NaN and infinities are refused."""
+    try:
+        items = list(values)
+    except TypeError:
+        raise SessionError(f"{field}: must be three numbers x, y, z [m], got {values!r}") from None
+    if len(items) != 3:
+        raise SessionError(f"{field}: must be three numbers x, y, z [m], got {len(items)}")
+    return [typed_number(v, f"{field}.{name}", "m") for name, v in zip("xyz", items)]
+
+
+def typed_number(value: Any, field: str, unit: str) -> float:
+    """One typed number of the field ``field`` in ``unit``; :class:`SessionError` names the field
+    (``yaw: must be a number [deg], got 'abc'``) for booleans, text, NaN and infinities."""
+    if isinstance(value, bool):
+        raise SessionError(f"{field}: must be a number [{unit}], got {value!r}")
+    try:
+        f = float(value)
+    except (TypeError, ValueError):
+        raise SessionError(f"{field}: must be a number [{unit}], got {value!r}") from None
+    if not math.isfinite(f):
+        raise SessionError(f"{field}: must be a finite number [{unit}], got {value!r}")
+    return f
+
+
 def typed_goal(values: Sequence[Any], workspace: Workspace) -> Vec3:
     """A goal typed as ``(x, y, z)`` (world [m], z = height of the goal; the floor is ``workspace.floor``).
 
     Raises :class:`SessionError` naming the bad field (``goal.y: must be a finite number``) or
     saying which bound the point leaves.
     """
-    try:
-        items = list(values)
-    except TypeError:
-        raise SessionError(f"goal: must be three numbers x, y, z [m], got {values!r}") from None
-    if len(items) != 3:
-        raise SessionError(f"goal: must be three numbers x, y, z [m], got {len(items)}")
-    out: list[float] = []
-    for name, v in zip("xyz", items):
-        if isinstance(v, bool):
-            raise SessionError(f"goal.{name}: must be a number [m], got {v!r}")
-        try:
-            f = float(v)
-        except (TypeError, ValueError):
-            raise SessionError(f"goal.{name}: must be a number [m], got {v!r}") from None
-        if not math.isfinite(f):
-            raise SessionError(f"goal.{name}: must be a finite number [m], got {v!r}")
-        out.append(f)
+    out = typed_xyz(values, "goal")
     ws = workspace
     for axis, name in enumerate("xyz"):
         lo, hi = float(ws.min[axis]), float(ws.max[axis])
