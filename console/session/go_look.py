@@ -26,7 +26,7 @@ from dataclasses import dataclass, field
 from typing import Any, Sequence
 
 from planner.goal_look import hidden_by, known_state
-from planner.mission import turn_segment
+from planner.mission import MissionError, heading_to, turn_segment
 from planner.route import Route
 
 from console.session.job_thread import JobThread
@@ -104,8 +104,8 @@ class GoLookJob(JobThread):
         """Go look towards ``target`` (world ``(x, y)`` on the floor or ``(x, y, z)`` [m]); returns at once.
 
         Raises:
-            SessionError: Not finite, outside the workspace, another look / capture / mission under way,
-                no robot state.
+            SessionError: Not finite, outside the workspace, right at the robot (no heading to face, as
+                Look at goal says), another look / capture / mission under way, no robot state.
         """
         t = [float(v) for v in target]
         ws = self._session.workspace
@@ -115,7 +115,11 @@ class GoLookJob(JobThread):
             raise SessionError(f"go look: the goal must be finite numbers (x, y[, z]) [m], got {target!r}")
         if not ws.contains(t):
             raise SessionError(f"go look: the goal {_fmt(t)} is outside the workspace {_fmt(ws.min)}..{_fmt(ws.max)}")
-        self._robot_ready(self._link, self._mapping, "a look is already running: pause or stop it first", "Go look")
+        st = self._robot_ready(self._link, self._mapping, "a look is already running: pause or stop it first", "Go look")
+        try:  # Look at goal's rule: a goal right at the robot has no heading to face
+            heading_to(st.position, (t[0], t[1], 0.0))
+        except MissionError as exc:
+            raise SessionError(f"go look: {exc}") from None
         goal = (t[0], t[1], t[2])
         with self._lock:
             if self.outcome.target != goal:

@@ -49,7 +49,8 @@ from console.session.operator_state import battery_level
 from console.session.search_choose import GridCache, choose_viewpoint, confirm_choice
 from console.session.search_finish import SearchFinish, is_contact, untried
 from console.session.search_moves import BATTERY, PAUSED, STOPPED, SearchMoves
-from console.session.search_report import battery_low, left_unseen, result_event, step_event, viewpoint_json
+from console.session.search_report import (battery_low, left_unseen, result_event, result_headline, result_line,
+                                           step_event, viewpoint_json)
 from console.session.search_types import (
     CONFIRM_CAPTURES, GAIN_MIN, MISSION_TIMEOUT, MODES, SURE_SCORE, SURE_SIGMA, SearchConfig, SearchResult,
     target_height, target_matches,
@@ -303,12 +304,11 @@ class SearchJob(SearchFinish, SearchMoves, JobThread):
         if not r.found:
             r.left_unseen = self._unseen_text(pos, r.reason)
         r.steps = list(self.steps)
-        text = (f"found {r.target_id} at {r.distance_to_target:.2f} m" if r.found and r.distance_to_target is not None
-                else r.reason)
+        text = result_headline(r)
         self._land_nearest(False)
         self._set_job(JobStatus(self._name(), False, 1.0, f"{text}: {plural(r.captures, 'capture')}, {r.path_length:.1f} m, "
                                                             f"{r.time:.0f} s"))
-        s.notify(self._name(), f"{text} ({plural(r.captures, 'capture')}, {r.path_length:.1f} m travelled)"
+        s.notify(self._name(), result_line(r)
                  + (f"; left unseen: {r.left_unseen}" if r.left_unseen else ""), "success" if r.found else "warning")
         self._announce(result_event(self.search_id, r))
 

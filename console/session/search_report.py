@@ -20,6 +20,7 @@ from planner.search_viewpoints import UNKNOWN, Viewpoint, path_costs
 
 from console.session.operator_state import BATTERY_CRITICAL, BATTERY_LOW
 from console.session.search_types import SearchResult
+from console.wording import plural
 
 STEP_KINDS = ("start", "capture", "viewpoint", "move", "turn", "seen", "paused", "resumed", "approve", "end")
 """What a step is: the search started, a capture was mapped, the next viewpoint was chosen, a move
@@ -68,6 +69,23 @@ def step_event(search_id: str, index: int, kind: str, text: str, **extra: Any) -
 def result_event(search_id: str, result: SearchResult) -> dict[str, Any]:
     """The ``/search/result`` record: the result as in ``result.json``, with the search's id."""
     return {"search_id": search_id, **asdict(result)}
+
+
+def result_headline(result: SearchResult) -> str:
+    """What a search ended with, in words: ``found robot_dog-1 at 0.98 m`` (its distance [m] from the robot
+    in the floor plane) when found, else the end's reason (``not found: budget of 20 captures used``)."""
+    if result.found and result.distance_to_target is not None:
+        return f"found {result.target_id} at {result.distance_to_target:.2f} m"
+    if result.found and result.target_id:
+        return f"found {result.target_id}"
+    return result.reason
+
+
+def result_line(result: SearchResult) -> str:
+    """The end notice's line: :func:`result_headline` with the captures and the path travelled [m]:
+    ``found robot_dog-1 at 0.98 m (12 captures, 39.1 m travelled)``; the console's panel says the same."""
+    return (f"{result_headline(result)} ({plural(result.captures, 'capture')}, "
+            f"{result.path_length:.1f} m travelled)")
 
 
 def battery_low(battery: float | None, reserve: float) -> str | None:

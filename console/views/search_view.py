@@ -21,6 +21,7 @@ import viser
 from console.session.operator_state import BATTERY_LOW
 from console.session.search import MODES, SearchJob
 from console.session.search_inputs import PANEL_NAMES, search_config
+from console.session.search_report import result_line
 from console.session.search_types import BATTERY_RESERVE, MAX_CAPTURES, MAX_TIME, MIN_TIME
 from console.session.session import JOB, RUN, SEARCH, Session, SessionError
 from console.views.client_notice import tell
@@ -120,7 +121,8 @@ class SearchView:
         steps = job.steps
         r = job.result
         if r is not None and not running and r.reason:
-            text = f"<b>{'found' if r.found else 'ended'}</b>: {html.escape(r.reason)} ({r.captures} captures, {r.path_length:.1f} m)"
+            line = html.escape(result_line(r))  # the end notice's words
+            text = f"<b>{line}</b>" if r.found else f"<b>ended</b>: {line}"
             if r.left_unseen:
                 text += f"<br>left unseen: {html.escape(r.left_unseen)}"
         elif paused:

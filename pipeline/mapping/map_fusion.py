@@ -129,8 +129,8 @@ def fuse(scene: Scene, observations: Scene, *, catalog: Any = None, config: Fusi
         agreeing = sum(1 for i in good if i in match)
         held = map_consistency.disagreement(len(good), len(expected), agreeing)
         if held is not None:
-            outs = tuple(Outcome(o.id, o.label, "rejected", reason="capture held back", sigma=sig[i].along)
-                         for i, o in enumerate(obs))
+            outs = tuple(Outcome(o.id, o.label, "rejected", reason="capture held back", sigma=sig[i].along,
+                                 detection=i + 1, score=o.score) for i, o in enumerate(obs))
             return scene, FusionReport(outs, (), held)
 
     last = id_numbers(scene.objects, scene.last_ids)  # numbers the map's life has given out
@@ -154,7 +154,7 @@ def fuse(scene: Scene, observations: Scene, *, catalog: Any = None, config: Fusi
                 if out:
                     reason = f"{reach:.1f} m outside the workspace: not added"
             if reason is not None:
-                outcomes.append(Outcome(o.id, o.label, "rejected", None, reason, sig[i].along))
+                outcomes.append(Outcome(o.id, o.label, "rejected", None, reason, sig[i].along, i + 1, o.score))
                 continue
             new_id = next_id(o.id, o.label, index, last)
             objects.append(replace(o, id=new_id, history=(sighting(o, c, others=obs),), pinned=False, flags=()))
@@ -174,7 +174,7 @@ def fuse(scene: Scene, observations: Scene, *, catalog: Any = None, config: Fusi
             note = reason or "pinned: recorded, not moved"
             objects[j] = replace(m, history=old + (sighting(o, c, used=False, note=note, others=obs),))
             action: Action = "rejected" if reason is not None else "recorded"
-            outcomes.append(Outcome(o.id, o.label, action, m.id, note, sig[i].along))
+            outcomes.append(Outcome(o.id, o.label, action, m.id, note, sig[i].along, i + 1, o.score))
             continue
         history = old + (sighting(o, c, others=obs),)
         objects[j] = refit(m, history, o)

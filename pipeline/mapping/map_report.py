@@ -56,6 +56,8 @@ class Outcome:
         object_id: The map object it became or matched, if any.
         reason: Why rejected (or recorded only).
         sigma: Its along-ray 1-sigma [m].
+        detection: Its place in the capture's detections, 1-based (0: not known).
+        score: Its detector confidence in [0, 1] (NaN: not known).
     """
 
     observation: str
@@ -64,6 +66,18 @@ class Outcome:
     object_id: str | None = None
     reason: str = ""
     sigma: float = math.nan
+    detection: int = 0
+    score: float = math.nan
+
+    @property
+    def name(self) -> str:
+        """The observation as the photo names it, never by a map-like id (the capture's own ids, such as
+        ``cardboard_box-1``, may be a map object's too): ``detection 3 (cardboard_box, 0.81)``, else
+        ``a cardboard_box``."""
+        if self.detection <= 0:
+            return f"a {self.label}"
+        score = f", {self.score:.2f}" if math.isfinite(self.score) else ""
+        return f"detection {self.detection} ({self.label}{score})"
 
 
 @dataclass(frozen=True)
@@ -105,7 +119,7 @@ class FusionReport:
 
     def notes(self) -> list[str]:
         """Operator-facing lines: rejections, pinned objects seen again, corrections, hold-back."""
-        out = [f"{o.observation} ({o.label}) not used: {o.reason}" for o in self.rejected]
+        out = [f"{o.name} not used: {o.reason}" for o in self.rejected]
         out += [f"{o.object_id} is pinned: seen again at the capture, not moved" if o.reason != EXTENT_NOTE
                 else f"{o.object_id}: {o.reason}" for o in self.outcomes if o.action == "recorded"]
         out += [f"{oid}: {what}" for oid, what in self.corrections]

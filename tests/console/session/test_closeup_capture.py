@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import re
 import time
 from pathlib import Path
 
@@ -33,7 +34,8 @@ def test_a_close_up_keeps_what_it_can_range_and_names_what_it_dropped(tmp_path: 
         assert mapping.run()
         job = session.job
         assert not job.running and job.error is None
-        assert "not used: cardboard_box (camera too close" in job.message, job.message  # what and why, on the panel
+        assert re.search(r"not used: detection \d+ \(cardboard_box, \d\.\d\d\): camera too close", job.message), \
+            job.message  # what and why, on the panel
         assert first <= {o.id for o in session.scene.objects}  # nothing of the map was lost
     finally:
         robot.close()
