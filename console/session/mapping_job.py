@@ -33,6 +33,7 @@ from console.session.pinned_notes import pinned_far, pinned_views
 
 from console.session.session import CaptureRecord, Detection, JobStatus, Session, SessionError
 from console.session.session_types import MappingError
+from console.wording import plural
 
 log = logging.getLogger(__name__)
 
@@ -239,11 +240,11 @@ class MappingJob(BackgroundRun):
             known = self._observe_known(cap_id, shot, result)  # the known space, one undo step with the capture
             dt = time.perf_counter() - t0
             rejected, pinned = preview.rejected, len(pinned_views(preview))  # pinned: seen again, not moved
-            summary = (f"{n} objects seen ({len(report.added)} new, {len(report.updated)} updated"
+            summary = (f"{plural(n, 'object')} seen ({len(report.added)} new, {len(report.updated)} updated"
                        + (f", {pinned} kept pinned" if pinned else "")
                        + (f", {len(rejected)} not used" if rejected else "") + f") in {dt:.1f} s")
             far = pinned_far(preview, result.scene, mapped)  # a pinned object the capture sees elsewhere
-            dropped = ("; not used: " + "; ".join(f"{o.label} ({o.reason})" for o in rejected)) if rejected else ""
+            dropped = ("; not used: " + "; ".join(f"{o.name}: {o.reason}" for o in rejected)) if rejected else ""
             # a close-up drops only what it cannot range: each one and why stays on the panel
             self._session.set_job(JobStatus(name, False, 1.0, summary + "".join(f"; {f}" for f in far) + dropped + known))
             notes = far + preview.notes() + list(report.notes)
@@ -282,8 +283,7 @@ class MappingJob(BackgroundRun):
             summary = observe(cap_id, result.depth, shot.intrinsics, shot.camera_pose, shot.robot_pose, exact=exact)
         except SessionError as exc:
             return f"; {exc}"
-        cells = "cell" if summary.unlabelled == 1 else "cells"
-        text = f"; {summary.unlabelled} unlabelled obstacle {cells}"
+        text = f"; {plural(summary.unlabelled, 'unlabelled obstacle cell')}"
         if result.depth is None:
             return text + " (no depth: known space from the mapped boxes)"
         from console.session.known_space_state import DEPTH_NOISE_REL

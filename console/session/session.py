@@ -47,6 +47,7 @@ from console.session.capture_files import CAPTURE_DIR
 from console.session.history import History, Undo
 from console.session.known_space_state import KnownSpaceSession
 from console.session import edit_rules, goal_rules, mission_rules
+from console.wording import plural
 from console.session.merge import merge_observations, merge_report
 from console.session.object_follow import ObjectFollow
 from console.session.operator_session import OperatorRules
@@ -233,7 +234,7 @@ class Session(SessionReads, Persistence, Undo, OperatorRules, KnownSpaceSession,
             self._save_locked()
             count = len(self._route.registered)
         self._emit([(ROUTE, None), (MISSION, None)])
-        return f"segment {count} registered ({n} cells)"
+        return f"segment {count} registered ({plural(n, 'cell')})"
 
     def discard(self) -> None:
         """Drop the candidate path."""
