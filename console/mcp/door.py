@@ -38,6 +38,7 @@ from typing import Any, Mapping
 from console.mcp import state_read as read
 from console.mcp.proposals import Proposal, ProposalError, ProposalQueue
 from console.session.session_types import SessionError
+from console.wording import plural
 
 log = logging.getLogger(__name__)
 
@@ -409,10 +410,10 @@ class AgentDoor:
 
         def act() -> str:
             self.search.start(config)
-            return f"search for {target!r} started ({mode} mode, at most {config.max_captures} captures)"
+            return f"search for {target!r} started ({mode} mode, at most {plural(config.max_captures, 'capture')})"
 
         p = self.queue.propose("search", f"Find {target!r}: choose viewpoints, move, capture and map until it is "
-                               f"found ({mode} mode, at most {config.max_captures} captures)", why, act)
+                               f"found ({mode} mode, at most {plural(config.max_captures, 'capture')})", why, act)
         return p.to_dict()
 
     def _op_propose_look_around(self, args: Mapping[str, Any]) -> dict[str, Any]:

@@ -32,6 +32,7 @@ from planner.route import Route
 from console.session.job_thread import JobThread
 from console.session.mapping_job import MappingJob
 from console.session.session import RUN, JobStatus, Session, SessionError
+from console.wording import plural
 
 log = logging.getLogger(__name__)
 
@@ -299,7 +300,7 @@ class GoLookJob(JobThread):
         res = s.add_goal(goal)
         if res.ok:
             out.planned, out.next_look = True, None
-            self._end(f"after {out.looks} look{'s' if out.looks != 1 else ''} the goal {_fmt(goal[:2])} is seen: "
+            self._end(f"after {plural(out.looks, 'look')} the goal {_fmt(goal[:2])} is seen: "
                       f"route planned ({res.message}); Register and Execute it", "success")
             return
         grid = s.grid
@@ -307,7 +308,7 @@ class GoLookJob(JobThread):
         owner = grid.owner_of(cell) if cell is not None and grid.reason is not None else None
         if owner is not None and "not seen yet" not in res.message:  # an object's clearance closes it: no look opens it
             out.next_look = None
-            self._end(f"after {out.looks} look{'s' if out.looks != 1 else ''} the goal {_fmt(goal[:2])} is refused "
+            self._end(f"after {plural(out.looks, 'look')} the goal {_fmt(goal[:2])} is refused "
                       f"for a reason a look does not change: {res.message}", "warning")
             return
         why = hidden_by(grid, known_state(grid), look.eye, look.yaw, goal)

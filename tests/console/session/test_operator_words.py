@@ -5,7 +5,6 @@ Go look on the robot's own spot gives Look at goal's reason. World frame, z up [
 from __future__ import annotations
 
 import math
-import re
 from pathlib import Path
 
 import pytest
@@ -91,3 +90,23 @@ def test_go_look_on_the_robots_own_spot_says_look_at_goals_reason(rig) -> None:
     reason = f"({spot[0]:.2f}, {spot[1]:.2f}) is right at the robot: no heading to face"
     assert str(go.value) == f"go look: {reason}" and str(at.value) == f"look at: {reason}", (go.value, at.value)
     assert not rig.go_look.running and math.isfinite(spot[0])
+
+
+def test_an_agents_search_of_one_capture_says_one_capture(tmp_path: Path) -> None:
+    from console.mcp.door import AgentDoor
+    from console.session.session import Session
+
+    class _Search:
+        running = paused = False
+
+        def start(self, config) -> None:
+            self.running = True
+
+    door = AgentDoor(Session(tmp_path / "s"), runner=None, robot_spec="sim", search=_Search())
+    try:
+        p = door.call("propose_search", {"target": "robot dog", "why": "one look", "max_captures": 1},
+                      allow_actions=True)
+        assert p["title"].endswith("(auto mode, at most 1 capture)"), p  # before: "at most 1 captures"
+        assert door.queue.approve(p["id"]).outcome == "search for 'robot dog' started (auto mode, at most 1 capture)"
+    finally:
+        door.close()
