@@ -158,7 +158,9 @@ def test_abort_edit_and_land_keep_the_operator_in_control(tmp_path: Path) -> Non
         here = np.asarray(_floor_under(app))
         path = s.route_snapshot().registered[0]
         passed = int(np.argmin(np.linalg.norm(path[:, :2] - here[:2], axis=1)))
-        ahead = [p for p in path[passed:] if 0.65 < np.linalg.norm(p[:2] - here[:2])
+        # the crate (0.5 x 0.6 m, half-diagonal 0.39 m) must stay clear of the robot's 0.35 m radius: an object
+        # moved onto the robot is refused, whichever way the path turns
+        ahead = [p for p in path[passed:] if 0.8 < np.linalg.norm(p[:2] - here[:2])
                  and np.linalg.norm(p[:2] - path[-1][:2]) > 0.65]
         assert ahead, f"no room on the rest of the walk for the crate (robot at {here}, path {path.tolist()})"
         spot = ahead[0]
