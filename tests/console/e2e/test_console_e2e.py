@@ -181,14 +181,14 @@ def test_operator_maps_the_room_and_builds_a_mission(console: ConsoleApp, tmp_pa
             assert wait_until(lambda: len(app.server.get_clients()) == 1, 15), "the page did not connect"
 
             # --- Capture & map (simulated robot, ground-truth perception) ---------------------------
-            capture.click(timeout=120_000)  # a loaded machine's page can take long to act on a click
-            assert wait_until(lambda: session.job.name == JOB_NAME and not session.job.running and session.job.fraction == 1.0, 60), session.job
+            _click_until(page, "Capture & map", lambda: session.job is not None and session.job.name == JOB_NAME)
+            assert wait_until(lambda: session.job.name == JOB_NAME and not session.job.running and session.job.fraction == 1.0, 180), session.job
             assert len(session.scene.objects) >= 10, "the first photo should show the obstacles in front"
             counts = session.grid.counts()
             assert counts["occupied"] > 0 and counts["dangerous"] > 0
             assert session.capture is not None and session.capture.backend.startswith("ground truth")
             assert app.views["capture"].has_frustum
-            assert wait_until(lambda: len(app.views["objects"].drawn_ids()) == len(session.scene.objects), 10)
+            assert wait_until(lambda: len(app.views["objects"].drawn_ids()) == len(session.scene.objects), 60)
 
             # --- click a goal on the floor in the 3D view --------------------------------------------
             client = next(iter(app.server.get_clients().values()))
@@ -201,25 +201,23 @@ def test_operator_maps_the_room_and_builds_a_mission(console: ConsoleApp, tmp_pa
             sx = canvas["width"] / client.camera.image_width
             sy = canvas["height"] / client.camera.image_height
             page.mouse.click(canvas["x"] + px[0] * sx, canvas["y"] + px[1] * sy)
-            assert wait_until(lambda: session.route_snapshot().candidate_goal is not None, 20), \
+            assert wait_until(lambda: session.route_snapshot().candidate_goal is not None, 60), \
                 "the click on the floor did not make a candidate path"
             goal = session.route_snapshot().candidate_goal
             assert goal[2] == 0.0 and math.dist(goal[:2], target[:2]) < 0.3  # the ray hit the floor there
-            assert wait_until(lambda: "candidate" in app.views["paths"].drawn(), 10)
+            assert wait_until(lambda: "candidate" in app.views["paths"].drawn(), 60)
 
             # --- register, build the mission -----------------------------------------------------------
-            page.get_by_role("button", name="Register").click()
-            assert wait_until(lambda: len(session.route_snapshot().registered) == 1, 10)
-            page.get_by_role("button", name="Build mission").click()
-            assert wait_until(lambda: session.mission is not None, 10)
+            _click_until(page, "Register", lambda: len(session.route_snapshot().registered) == 1)
+            _click_until(page, "Build mission", lambda: session.mission is not None)
             mission = session.mission
             assert math.dist(mission.segments[0].start[:2], session.route_snapshot().start[:2]) < 0.2
             assert math.dist(mission.segments[-1].end[:2], goal[:2]) < 0.25
-            assert wait_until(lambda: all(f"mission_{k}" in app.views["paths"].drawn() for k in mission.kinds()), 10)
+            assert wait_until(lambda: all(f"mission_{k}" in app.views["paths"].drawn() for k in mission.kinds()), 60)
             drawn = app.views["paths"].drawn()
             assert "registered" in drawn and "candidate" not in drawn
             first = {"walk": "walk", "takeoff": "take-off", "fly": "fly", "land": "land"}[mission.kinds()[0]]
-            page.get_by_role("cell", name=first).first.wait_for(timeout=10_000)  # the segment list in the panel
+            page.get_by_role("cell", name=first).first.wait_for(timeout=60_000)  # the segment list in the panel
 
             # --- screenshot for people ---------------------------------------------------------------------
             page.add_style_tag(content=".mantine-Notifications-root { display: none !important; }")
@@ -232,36 +230,32 @@ def test_operator_maps_the_room_and_builds_a_mission(console: ConsoleApp, tmp_pa
             page.keyboard.down("Shift")  # in goal mode a plain click goes through objects; Shift selects
             page.mouse.click(canvas["x"] + opx[0] * sx, canvas["y"] + opx[1] * sy)
             page.keyboard.up("Shift")
-            assert wait_until(lambda: session.selected is not None, 10), "clicking the object did not select it"
+            assert wait_until(lambda: session.selected is not None, 60), "clicking the object did not select it"
             assert session.selected.id == obj.id
             time.sleep(0.5)
             assert session.route_snapshot().candidate_goal is None  # the click was not taken as a goal
             page.get_by_text("source capture").first.wait_for(timeout=60_000)  # the details table (a loaded machine)
-            page.get_by_role("button", name="Delete", exact=True).click()
-            page.get_by_role("button", name="Delete object").click(timeout=60_000)  # the question it asks first
-            assert wait_until(lambda: obj.id not in {o.id for o in session.scene.objects}, 10)
-            assert wait_until(lambda: obj.id not in app.views["objects"].drawn_ids(), 10)
+            page.get_by_role("button", name="Delete", exact=True).click(timeout=60_000)
+            _click_until(page, "Delete object", lambda: obj.id not in {o.id for o in session.scene.objects})  # the question
+            assert wait_until(lambda: obj.id not in app.views["objects"].drawn_ids(), 60)
 
             # --- a short walk in the mapped area, executed over the robot link ---------------------------
             # (the route behind the line may cross boxes the first photo did not see: that is what the
             # next Capture & map is for; the simulator would stop the robot there)
-            page.get_by_role("button", name="Clear").click()
-            assert wait_until(lambda: session.route_snapshot().registered == () and session.mission is None, 10)
+            _click_until(page, "Clear", lambda: session.route_snapshot().registered == () and session.mission is None)
             near = [(x, y) for y in (2.2, 2.0, 1.8, 2.4) for x in (2.5, 2.3, 2.7)]
             target, px = _clear_floor_pixel(app, client.camera, near)
             page.mouse.click(canvas["x"] + px[0] * sx, canvas["y"] + px[1] * sy)
-            assert wait_until(lambda: session.route_snapshot().candidate_goal is not None, 20)
+            assert wait_until(lambda: session.route_snapshot().candidate_goal is not None, 60)
             goal = session.route_snapshot().candidate_goal
-            page.get_by_role("button", name="Register").click()
-            assert wait_until(lambda: len(session.route_snapshot().registered) == 1, 10)
-            page.get_by_role("button", name="Build mission").click()
-            assert wait_until(lambda: session.mission is not None, 10)
+            _click_until(page, "Register", lambda: len(session.route_snapshot().registered) == 1)
+            _click_until(page, "Build mission", lambda: session.mission is not None)
             kinds_id = session.mission.id
             first_capture = session.capture.id
             runs: list[Any] = []  # every run status the session published (a short walk can end between polls)
             session.subscribe(lambda t, p: runs.append(p) if t == RUN else None)
-            page.get_by_role("button", name="Execute").click()
-            assert wait_until(lambda: session.run.state == "done", 60), session.run
+            _click_until(page, "Execute", lambda: bool(runs) or session.run.state != "idle")
+            assert wait_until(lambda: session.run.state == "done", 180), session.run
             assert any(r.state == "running" for r in runs), runs  # it went through the robot link, with progress
             assert kinds_id in session.run.message
             robot = session.robot
@@ -274,8 +268,8 @@ def test_operator_maps_the_room_and_builds_a_mission(console: ConsoleApp, tmp_pa
             other = ctx.new_page()
             other.set_viewport_size({"width": 1000, "height": 700})
             other.goto(app.url)
-            other.get_by_text(f"mission {kinds_id} done").first.wait_for(timeout=30_000)
-            assert wait_until(lambda: len(app.server.get_clients()) == 2, 15)
+            other.get_by_text(f"mission {kinds_id} done").first.wait_for(timeout=90_000)
+            assert wait_until(lambda: len(app.server.get_clients()) == 2, 60)
             n_before = len(session.scene.objects)
             _click_until(other, "Capture & map", lambda: session.job.running or session.capture.id != first_capture)
             assert wait_until(lambda: not session.job.running and session.capture.id != first_capture, 180)
