@@ -62,20 +62,6 @@ def test_find_panel_draws_the_result_line(tmp_path: Path) -> None:
         server.stop()
 
 
-@pytest.fixture()
-def rig(tmp_path: Path):
-    from console.cli.search_cmd import HeadlessRig
-    from console.link.world_file import paper_world
-    from console.session.go_look import GoLookJob
-
-    r = HeadlessRig(paper_world(), tmp_path / "session", time_scale=10.0)
-    r.go_look = GoLookJob(r.session, r.robot, r.mapping, r.runner)
-    yield r
-    r.go_look.stop()
-    r.go_look.wait(60)
-    r.close()
-
-
 def test_go_look_on_the_robots_own_spot_says_look_at_goals_reason(rig) -> None:
     from console.session.look import LookJob
 
