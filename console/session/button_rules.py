@@ -15,16 +15,22 @@ what a button would otherwise be refused for after the click:
   there, but a call is refused with these words).
 - **Hold** is off while the robot stands or hovers: it is holding already (``nothing to hold``).
 - **Return** says where it lands (:func:`return_hint`): at the take-off spot, not where the operator started
-  the last mission.
+  the last mission; or, when the robot may not land there (within its radius of a wall, an object on the
+  spot), at the nearest spot it fits, with how far and why -- from :func:`planner.landing_spot.return_spots`,
+  the function the session's Return plans to (:meth:`~console.session.operator_session.OperatorRules.return_mission`).
+  With no such spot, Return is off with the reason.
 
 Frames and units: world frame (z up) [m].
 """
 
 from __future__ import annotations
 
-from typing import Any, Mapping
+import math
+from dataclasses import dataclass
+from typing import Any, Mapping, Sequence
 
 from planner.grid import PlanningGrid, Workspace
+from planner.landing_spot import return_spots
 
 from console.session import operator_state as rules
 from console.session.operator_state import CommandState
@@ -77,16 +83,77 @@ def hold(robot: RobotSnapshot | None, run: RunStatus, ws: Workspace, launch: Vec
     return base
 
 
-def return_home(robot: RobotSnapshot | None, run: RunStatus, ws: Workspace, launch: Vec3 | None) -> CommandState:
-    """Return: off when there is nothing to return to (launch spot unknown, at it already) or it would be refused."""
-    return _why_hidden(rules.vehicle_commands(robot, run, ws, launch)["return"], robot, run)
+@dataclass(frozen=True)
+class ReturnTarget:
+    """Where Return lands (world frame, z up [m]).
+
+    Attributes:
+        spot: The first spot Return plans to (the take-off spot, or the nearest floor cell centre the
+            landing rule fits), ``None`` when no floor spot fits.
+        why: Why not at the take-off spot (``too near the wall``, the landing rule's words), ``""`` when
+            it lands on it.
+    """
+
+    spot: tuple[float, float, float] | None
+    why: str
 
 
-def return_hint(launch: Vec3 | None) -> str:
-    """What Return does, for its hover text and the mission panel: where it lands."""
+def return_target(grid: PlanningGrid | None, launch: Sequence[float]) -> ReturnTarget:
+    """Where Return lands from take-off spot ``launch`` (world [m]): the first of
+    :func:`planner.landing_spot.return_spots`, the spots the session's Return plans to in order (a later
+    one only when the planner cannot reach the first). No grid: the take-off spot."""
+    home = (float(launch[0]), float(launch[1]), float(launch[2]) if len(launch) > 2 else 0.0)
+    if grid is None:
+        return ReturnTarget(home, "")
+    spots, why = return_spots(grid, home)
+    return ReturnTarget(spots[0] if spots else None, why)
+
+
+def no_return_spot(launch: Sequence[float], why: str) -> str:
+    """The reason Return is off (and refused) when no floor spot fits the landing rule."""
+    return (f"cannot plan the return: no floor spot fits the landing rule (the take-off spot "
+            f"{fmt_point((float(launch[0]), float(launch[1])))}: {why})")
+
+
+def return_home(robot: RobotSnapshot | None, run: RunStatus, ws: Workspace, launch: Vec3 | None,
+                grid: PlanningGrid | None = None) -> CommandState:
+    """Return: off when there is nothing to return to (launch spot unknown, at it already), when no floor
+    spot near the take-off spot fits the landing rule (with ``grid``: :func:`return_target`), or when it
+    would be refused otherwise."""
+    base = _why_hidden(rules.vehicle_commands(robot, run, ws, launch)["return"], robot, run)
+    if not base.enabled or launch is None or grid is None:
+        return base
+    target = return_target(grid, launch)
+    if target.spot is None:
+        return CommandState(base.shown, False, no_return_spot(launch, target.why))
+    return base
+
+
+def return_hint(launch: Vec3 | None, grid: PlanningGrid | None = None,
+                end: Sequence[float] | None = None) -> str:
+    """What Return does, for its hover text, the mission panel and its notice: where it lands.
+
+    Args:
+        launch: The take-off spot (world [m]), ``None`` when not known yet.
+        grid: The planning grid; ``None``: the take-off spot is taken as fit for landing.
+        end: Where a Return already planned ends (its mission's last point, world [m]); ``None``: where
+            :func:`return_target` says it will land.
+
+    Example: ``Return: lands at (0.38, 0.62), 0.18 m from the take-off spot (0.20, 0.70), where the robot
+    cannot land: too near the wall``.
+    """
     if launch is None:
         return "Return: lands at the take-off spot (not known yet: the robot was never seen standing disarmed)"
-    return f"Return: lands at the take-off spot {fmt_point((float(launch[0]), float(launch[1])))}"
+    home = fmt_point((float(launch[0]), float(launch[1])))
+    target = return_target(grid, launch)
+    if not target.why:
+        return f"Return: lands at the take-off spot {home}"
+    spot = end if end is not None else target.spot
+    if spot is None:
+        return f"Return: no floor spot near the take-off spot {home} fits the landing rule ({target.why})"
+    d = math.hypot(float(spot[0]) - float(launch[0]), float(spot[1]) - float(launch[1]))
+    return (f"Return: lands at {fmt_point((float(spot[0]), float(spot[1])))}, {d:.2f} m from the take-off spot "
+            f"{home}, where the robot cannot land: {target.why}")
 
 
 def vehicle_commands(robot: RobotSnapshot | None, run: RunStatus, ws: Workspace, launch: Vec3 | None,
@@ -95,13 +162,16 @@ def vehicle_commands(robot: RobotSnapshot | None, run: RunStatus, ws: Workspace,
     out = dict(rules.vehicle_commands(robot, run, ws, launch, grid))
     out["hold"] = hold(robot, run, ws, launch)
     out["land"] = land_here(robot, run, ws, launch, grid)
-    out["return"] = return_home(robot, run, ws, launch)
+    out["return"] = return_home(robot, run, ws, launch, grid)
     return out
 
 
-def hover_text(name: str, label: str, state: CommandState, launch: Vec3 | None) -> str:
-    """A vehicle-command button's hover text: what it does, and why it is off (the session's own words)."""
-    does = return_hint(launch) if name == "return" else f"Vehicle command: {label}"
+def hover_text(name: str, label: str, state: CommandState, launch: Vec3 | None, hint: str | None = None) -> str:
+    """A vehicle-command button's hover text: what it does, and why it is off (the session's own words).
+
+    ``hint``: Return's line where the session computed it with the grid (``OperatorView.return_hint``);
+    ``None``: :func:`return_hint` without the grid."""
+    does = (hint or return_hint(launch)) if name == "return" else f"Vehicle command: {label}"
     if state.enabled or not state.reason:
         return does
     why = state.reason if state.reason.startswith(f"{label} is off") else f"{label} is off: {state.reason}"
@@ -120,5 +190,5 @@ def refusal(name: str, label: str, states: Mapping[str, Any]) -> str | None:
     return f"{label} is not possible now: {state.reason}"
 
 
-__all__ = ["HELD_MODES", "hold", "hover_text", "land_here", "refusal", "return_hint", "return_home",
-           "vehicle_commands"]
+__all__ = ["HELD_MODES", "ReturnTarget", "hold", "hover_text", "land_here", "no_return_spot", "refusal", "return_hint",
+           "return_home", "return_target", "vehicle_commands"]

@@ -47,6 +47,8 @@ class OperatorView:
         launch: Where Return goes (the floor spot the robot last stood on disarmed), or ``None``.
         battery_note: While the robot hovers with no mission running (none, ended, or paused), the battery time left to land
             (:func:`console.session.battery_estimate.hover_text`), else ``""``.
+        return_hint: Where Return lands and, when not on the take-off spot, how far from it and why
+            (:func:`console.session.button_rules.return_hint`; a Return under way: where its mission ends).
     """
 
     route_note: str | None = None
@@ -57,6 +59,7 @@ class OperatorView:
     running: str = ""
     launch: Vec3 | None = None
     battery_note: str = ""
+    return_hint: str = ""
 
 
 @dataclass(frozen=True)
@@ -124,13 +127,16 @@ class OperatorRules:
                 retired = rules.battery_blocker(robot)  # low battery: the operator's mission does not resume
             hovering = (robot is not None and run.state != "running" and rules.airborne(robot, ws)
                         and robot.mode in button_rules.HELD_MODES)
+            returning = self._running is not None and self._running.command == "Return" and run.active
+            end = self._running.mission.segments[-1].end if returning and self._running.mission.segments else None  # type: ignore[union-attr]
             return OperatorView(note, blocker, retired,
                                 self._land_choice_locked(button_rules.vehicle_commands(robot, run, ws, self._launch,
                                                                                 self._grid)),  # type: ignore[attr-defined]
                                 rules.ends_in_air(self._mission, ws),  # type: ignore[attr-defined]
                                 self._running.command if self._running is not None and run.active else "",
                                 self._launch,
-                                hover_text(robot.battery, self._drain_rate().rate()) if hovering else "")  # type: ignore[union-attr]
+                                hover_text(robot.battery, self._drain_rate().rate()) if hovering else "",  # type: ignore[union-attr]
+                                button_rules.return_hint(self._launch, self._grid, end))  # type: ignore[attr-defined]
 
     # --- hooks called by the session -------------------------------------------------------------
     def _goal_problem_locked(self, goal: Vec3) -> str | None:
@@ -408,14 +414,13 @@ class OperatorRules:
         fits (:func:`planner.landing_spot.return_spots`), which the operator is told."""
         with self._lock:  # type: ignore[attr-defined]
             r, ws, home = self._robot, self._workspace, self._launch  # type: ignore[attr-defined]
-            state = button_rules.return_home(r, self._run, ws, home)  # type: ignore[attr-defined]
+            state = button_rules.return_home(r, self._run, ws, home, self._grid)  # type: ignore[attr-defined]
             origin = rules.robot_origin(r, ws) if r is not None else None
             if not state.enabled or origin is None or home is None:
                 raise SessionError(state.reason or "Return applies when the robot is armed or in the air")
             spots, why = return_spots(self._grid, home)  # type: ignore[attr-defined]
             if not spots:
-                raise SessionError(f"cannot plan the return: no floor spot fits the landing rule (the take-off spot "
-                                   f"{rules.fmt_point(home[:2])}: {why})")
+                raise SessionError(button_rules.no_return_spot(home, why))
             for spot in spots:
                 res = self._route.plan(origin, spot)  # type: ignore[attr-defined]
                 if res.ok:
@@ -426,8 +431,7 @@ class OperatorRules:
                 mission = rules.mission_from_path(res.cells, self._grid, f"return-{uuid.uuid4().hex[:6]}")  # type: ignore[attr-defined]
             except MissionError as exc:
                 raise SessionError(f"cannot fly the return: {exc}") from None
-        if why:
-            end = mission.segments[-1].end
-            self.notify("Return", f"Return: lands at {rules.fmt_point(end[:2])}, {rules.gap(end[:2], home[:2]):.2f} m "  # type: ignore[attr-defined]
-                        f"from the take-off spot {rules.fmt_point(home[:2])} ({why})")
+            said = button_rules.return_hint(home, self._grid, mission.segments[-1].end) if why else ""  # type: ignore[attr-defined]
+        if said:  # the words of Return's hover text, with where this mission really ends
+            self.notify("Return", said)  # type: ignore[attr-defined]
         return mission

@@ -239,7 +239,7 @@ class MissionView:
             self._progress.color = colors.get(run.state, "blue")
             doing = f"{view.running}: " if view.running else ""
             if view.running == "Return":  # where it lands: the take-off spot, not where the operator started
-                doing = f"{return_hint(view.launch)} · "
+                doing = f"{view.return_hint or return_hint(view.launch)} · "
             self._status.content = (f"<small>{html.escape(doing)}<b>{html.escape(run.state)}</b>"
                                     f"{' · ' + html.escape(run.message) if run.message else ''}</small>"
                                     if shown else "")

@@ -288,7 +288,7 @@ class RobotView:
         view = self._session.operator_state()
         states = view.commands
         key = (tuple(sorted((n, c.shown, c.enabled, c.reason) for n, c in states.items())), view.launch,
-               view.battery_note)
+               view.battery_note, view.return_hint)
         with self._lock:
             if key == self._shown_commands:
                 return
@@ -300,7 +300,7 @@ class RobotView:
                 c = states[name]  # one rule per button (console.session.button_rules): the session refuses with it too
                 button.visible = c.shown
                 button.disabled = not c.enabled
-                button.hint = hover_text(name, LABELS[name], c, view.launch)
+                button.hint = hover_text(name, LABELS[name], c, view.launch, view.return_hint)
             if not self._buttons:
                 return
             self._hints.content = hint_spans((b, b.hint or "") for b in self._buttons.values())

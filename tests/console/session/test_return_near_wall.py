@@ -41,7 +41,8 @@ def test_return_to_a_take_off_spot_beside_the_wall_lands_at_the_nearest_fit_spot
     assert landing_problem(s.grid, end) is None and min(end[0], end[1]) > 0.35  # keeps its radius from the walls
     said = [n.body for n in notices if n.title == "Return"]
     d = math.dist(end[:2], (0.2, 0.7))
-    assert said == [f"Return: lands at (0.38, 0.62), {d:.2f} m from the take-off spot (0.20, 0.70) (too near the wall)"]
+    assert said == [f"Return: lands at (0.38, 0.62), {d:.2f} m from the take-off spot (0.20, 0.70), where the robot "
+                    "cannot land: too near the wall"]
 
 
 def test_return_to_a_take_off_spot_that_fits_lands_on_it_and_says_nothing_more(tmp_path: Path) -> None:
