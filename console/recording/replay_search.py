@@ -5,6 +5,10 @@
 camera position along the heading; the latest in orange with its gain and cost, earlier ones grey), the
 path of every move (the mission's waypoints; the latest in blue) and, in a *Search* line in the replay
 panel, the step shown and the search's end once it has ended. World frame (z up) [m], headings [rad].
+
+The latest viewpoint's label ("viewpoint 3: gain 3.1 m³, cost 4.2") is drawn per tab through the label declutter
+(:mod:`console.views.object_labels`, layer ``search``, as the live search's): it never sits on the robot's label
+(which wins) nor on another label.
 """
 
 from __future__ import annotations
@@ -15,6 +19,10 @@ from typing import Any, Sequence
 
 import numpy as np
 
+from console.views.object_labels import LabelSpot, board_for, show_in_layer
+
+LABEL_NODE = "/search/replay/chosen_why"
+"""The viewpoint label's server-wide node, used only on a server without a label declutter."""
 CHOSEN_RGB = (255, 140, 0)
 EARLIER_RGB = (150, 150, 150)
 PATH_RGB = (30, 110, 230)
@@ -38,6 +46,11 @@ def path_segments(paths: Sequence[Sequence[Sequence[float]]]) -> np.ndarray:
     """``N x 2 x 3`` line pieces of polylines (world [m])."""
     pieces = [(p[k], p[k + 1]) for p in paths for k in range(len(p) - 1)]
     return np.asarray(pieces, dtype=np.float32).reshape(-1, 2, 3)
+
+
+def viewpoint_text(n: int, vp: dict[str, Any]) -> str:
+    """The label of the ``n``-th viewpoint (1-based): its information gain [m³] and cost."""
+    return f"viewpoint {n}: gain {float(vp['gain']):.1f} m³, cost {float(vp['cost']):.1f}"
 
 
 def search_line(steps: Sequence[dict[str, Any]], result: dict[str, Any] | None) -> str:
@@ -71,6 +84,7 @@ class SearchReplayView:
         self._server, self._line = server, line
         self._key: Any = None
         self._handles: dict[str, Any] = {}
+        self._fallback: list[Any] = []  # server-wide label nodes (a server without a label declutter)
         self.drawn: dict[str, int] = {"viewpoints": 0, "paths": 0}
 
     def _put(self, name: str, make: Any) -> None:
@@ -98,9 +112,7 @@ class SearchReplayView:
             "/search/replay/viewpoints", viewpoint_segments(vps[:-1]), EARLIER_RGB, thickness=0.025))
         self._put("chosen", None if not vps else lambda: sc.add_line_segments(
             "/search/replay/chosen", viewpoint_segments(vps[-1:]), CHOSEN_RGB, thickness=0.05))
-        self._put("label", None if not vps else lambda: sc.add_label(
-            "/search/replay/chosen_why", f"viewpoint {len(vps)}: gain {float(vps[-1]['gain']):.1f} m³, "
-            f"cost {float(vps[-1]['cost']):.1f}", position=tuple(float(v) for v in vps[-1]["eye"])))
+        self._show_label(vps)
         self._put("old_paths", None if len(paths) < 2 else lambda: sc.add_line_segments(
             "/search/replay/paths", path_segments(paths[:-1]), OLD_PATH_RGB, thickness=0.02))
         self._put("path", None if not paths or len(paths[-1]) < 2 else lambda: sc.add_line_segments(
@@ -108,5 +120,24 @@ class SearchReplayView:
         self.drawn = {"viewpoints": len(vps), "paths": len(paths)}
         self._line.content = search_line(steps, result)
 
+    def _show_label(self, vps: Sequence[dict[str, Any]]) -> None:
+        """The latest viewpoint's label (none without a viewpoint), in every tab's declutter."""
+        for h in self._fallback:
+            try:
+                h.remove()
+            except Exception:  # noqa: BLE001 - already gone with the scene
+                pass
+        spots = [] if not vps else [LabelSpot(viewpoint_text(len(vps), vps[-1]),
+                                              tuple(float(v) for v in vps[-1]["eye"]), (), "top-left")]  # type: ignore[arg-type]
+        self._fallback = show_in_layer(self._server, "search", spots, LABEL_NODE)
 
-__all__ = ["SearchReplayView", "path_segments", "search_line", "viewpoint_segments"]
+    def label_spots(self) -> list[LabelSpot]:
+        """The viewpoint label placed now (in the declutter or server-wide), ``[]`` or one (tests)."""
+        board = board_for(self._server)
+        if board is not None:
+            return board.spots("search")
+        return [LabelSpot(str(h.text), tuple(float(v) for v in h.position), (), str(h.anchor))  # type: ignore[arg-type]
+                for h in self._fallback]
+
+
+__all__ = ["LABEL_NODE", "SearchReplayView", "path_segments", "search_line", "viewpoint_segments", "viewpoint_text"]

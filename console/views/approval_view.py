@@ -6,7 +6,9 @@ how many more wait, and the last decisions. **Approve** carries the proposal out
 thread: e.g. the mission manager starts the proposed mission), **Reject** refuses it; the optional
 note goes back to the agent with the decision. The panel sits at the top of the control panel and
 shows itself at the agent's first request; a candidate path the agent planned is labelled
-*proposed by the agent* at its goal in the 3D view.
+*proposed by the agent* at its goal in the 3D view. That label is drawn per tab through the label declutter
+(:mod:`console.views.object_labels`, layer ``agent``): it never sits on the robot's label (which wins) nor on
+another label.
 """
 
 from __future__ import annotations
@@ -19,12 +21,16 @@ from typing import Any
 import viser
 
 from console.views.client_notice import tell
+from console.views.object_labels import LabelSpot, board_for, show_in_layer
 from console.session.session import ROUTE, Session
 
 log = logging.getLogger(__name__)
 
 LABEL_NODE = "/agent/candidate_label"
+"""The label's server-wide node, used only on a server without a label declutter."""
 AGENT_LABEL = "proposed by the agent"
+LABEL_LIFT_M = 0.6
+"""Height of the label's anchor (its bottom centre) above the agent's goal [m]."""
 HISTORY_SHOWN = 3
 
 
@@ -74,7 +80,8 @@ class ApprovalView:
             self._history = gui.add_html("")
         self._approve.on_click(lambda e: self._decide(e, True))
         self._reject.on_click(lambda e: self._decide(e, False))
-        self._label: Any = None
+        self._spots: list[LabelSpot] = []  # the label placed now (in the declutter), [] or one
+        self._fallback: list[Any] = []  # its server-wide nodes (a server without a label declutter)
         self._unsubscribe = [door.queue.subscribe(lambda *_: self.refresh()),
                              session.subscribe(self._on_event)]
         self.refresh()
@@ -86,8 +93,14 @@ class ApprovalView:
 
     @property
     def labelled(self) -> bool:
-        """Whether the 3D view labels a candidate as proposed by the agent."""
-        return self._label is not None
+        """Whether the 3D view labels a candidate as proposed by the agent (each tab shows it where it overlaps
+        no label that wins: the robot's)."""
+        return bool(self._spots)
+
+    @property
+    def label_spots(self) -> list[LabelSpot]:
+        """The label placed now, ``[]`` or one: text and anchor (world [m], bottom centre)."""
+        return list(self._spots)
 
     def close(self) -> None:
         for u in self._unsubscribe:
@@ -130,12 +143,18 @@ class ApprovalView:
         near = self._session.workspace.resolution / 2 + 1e-6  # a registered goal is its cell's centre [m]
         goal = next((g for g in (snap.candidate_goal, snap.goals[-1] if snap.goals else None)
                      if g is not None and mine is not None and max(abs(a - b) for a, b in zip(g, mine)) < near), None)
-        if goal is not None:
-            pos = (float(goal[0]), float(goal[1]), float(goal[2]) + 0.6)
-            self._label = self._server.scene.add_label(LABEL_NODE, AGENT_LABEL, position=pos, anchor="bottom-center")
-        elif self._label is not None:
-            self._label.remove()
-            self._label = None
+        spots = [] if goal is None else [LabelSpot(AGENT_LABEL, (float(goal[0]), float(goal[1]),
+                                                                 float(goal[2]) + LABEL_LIFT_M), (), "bottom-center")]
+        with self._lock:
+            if spots == self._spots and (not spots or (board_for(self._server) is not None) == (not self._fallback)):
+                return  # unchanged, and drawn where it belongs (a declutter made since: moved into it)
+            for h in self._fallback:
+                try:
+                    h.remove()
+                except Exception:  # noqa: BLE001 - already gone with the scene
+                    pass
+            self._spots = spots
+            self._fallback = show_in_layer(self._server, "agent", spots, LABEL_NODE)
 
     # --- clicks -----------------------------------------------------------------------------------
     def _decide(self, event: Any, approve: bool) -> None:

@@ -2,13 +2,15 @@
 
 viser draws a label as a billboard of constant screen size (``12 px * font_screen_scale`` per em,
 whatever the distance). Every tab gets its own label nodes (``client.scene``) in *layers*: the mapped
-objects' labels (``objects``) and the mission's take-off and landing spots (``paths``, set by the paths
-view). Whenever a tab's camera moves, or the robot or another label moves, the labels are projected into
-that tab's picture and kept greedily, most important first (the selected object's, then the search's next
-viewpoint (``search``, set by the search view), then the paths', then the nearest objects'), skipping any whose
+objects' labels (``objects``), the search's viewpoint (``search``: the live search's next viewpoint, set by the
+search view, or in a replay the recorded search's latest, set by :mod:`console.recording.replay_search`), the
+agent's candidate goal (``agent``: "proposed by the agent", set by the approval view) and the mission's take-off
+and landing spots (``paths``, set by the paths view). Whenever a tab's camera moves, or the robot or another label
+moves, the labels are projected into that tab's picture and kept greedily, most important first (the selected
+object's, then the search's viewpoint, the agent's, the paths', then the nearest objects'), skipping any whose
 box would overlap one already kept, up to :data:`MAX_LABELS`.
 
-Labels every tab shares (server-wide nodes: the robot's, the agent's, the origin's) are always drawn and win:
+Labels every tab shares (server-wide nodes: the robot's, the origin's) are always drawn and win:
 the decluttered ones leave them free (:func:`fixed_labels` reads them, with their text and where they are now,
 from the viser server), and the goal markers too (:meth:`ClientLabels.set_markers`).
 Zooming in spreads the objects apart and shows more labels; selecting an object always shows its label.
@@ -48,12 +50,13 @@ GAP_PX = 3.0
 MARKER_PX = 18.0
 """Side of the square kept free around a goal marker [CSS px] (a 0.07-0.08 m sphere seen from the default view)."""
 
-LAYERS = ("search", "paths", "objects")
-"""Label layers in order of importance (after the selected object's label, always first): the search's next
-viewpoint, the mission's take-off and landing spots, the mapped objects."""
+LAYERS = ("search", "agent", "paths", "objects")
+"""Label layers in order of importance (after the selected object's label, always first): the search's
+viewpoint, the agent's candidate goal, the mission's take-off and landing spots, the mapped objects."""
 
-MARKER_LAYERS = ("search", "paths")
-"""Layers whose labels name a marker (a take-off spot, the viewpoint the robot goes to): they may touch it."""
+MARKER_LAYERS = ("search", "agent", "paths")
+"""Layers whose labels name a marker (a take-off spot, the viewpoint the robot goes to, the goal the agent
+planned): they may touch it."""
 
 Rect = tuple[float, float, float, float]  # x0, y0, x1, y1 [px], x right, y down
 
@@ -265,6 +268,21 @@ def board_for(server: Any) -> "ClientLabels | None":
     return _boards.get(id(server))
 
 
+def show_in_layer(server: Any, layer: str, spots: Sequence[LabelSpot], fallback: str) -> Any:
+    """Put ``spots`` in ``layer`` of ``server``'s per-tab declutter (:func:`board_for`), which places them in every
+    tab (the robot's label wins); a server without one (no objects view) gets them as server-wide labels named
+    ``fallback``, ``fallback_1``, ... Returns those server-wide handles (remove them before the next call), or
+    ``[]`` with a declutter. Raises ``ValueError`` naming ``layer`` when it is not one of :data:`LAYERS`."""
+    if layer not in LAYERS:
+        raise ValueError(f"layer: must be one of {', '.join(LAYERS)}, got {layer!r}")
+    board = board_for(server)
+    if board is not None:
+        board.set_layer(layer, spots)
+        return []
+    return [server.scene.add_label(fallback if n == 0 else f"{fallback}_{n}", s.text, position=s.position,
+                                   anchor=s.anchor, font_screen_scale=s.font_scale) for n, s in enumerate(spots)]
+
+
 class ClientLabels:
     """The decluttered labels of every tab of a viser server (one per server: :func:`board_for` finds it).
 
@@ -435,4 +453,4 @@ class ClientLabels:
 
 
 __all__ = ["ClientLabels", "FixedLabel", "LAYERS", "LabelSpot", "MAX_LABELS", "board_for", "choose", "declutter",
-           "fixed_labels", "label_rect", "overlaps", "project"]
+           "fixed_labels", "label_rect", "overlaps", "project", "show_in_layer"]

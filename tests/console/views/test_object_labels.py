@@ -136,7 +136,7 @@ def test_labels_every_tab_shows_are_found_where_they_are_now_and_others_leave_th
         path = LabelSpot("2. take-off · 5. land", (2.4, 4.3, 0.05), (), "top-center", 0.75)
         first = choose([*spots, path], cam, rank=[1] * len(spots) + [0])
         assert first[0][0] == len(spots)  # the paths' label before the objects'
-        with pytest.raises(ValueError, match="layer: must be one of search, paths, objects"):
+        with pytest.raises(ValueError, match="layer: must be one of search, agent, paths, objects"):
             board.set_layer("route", [path])
         board.close()
     finally:
