@@ -9,7 +9,9 @@ search's next viewpoint, and plans again, as long as the capture budget lasts. W
 spot beside it is farther than :data:`NEAR_GAP` from it (the floor nearer it not seen: it could end 1 m
 off), it takes one such look first and plans again. A move that ends in a contact with something the map did not show is counted (``contacts``
 in the result), followed by a capture and a new plan from where the robot stopped, and never
-repeated from the same spot to the same goal (:func:`repeats`, :func:`untried`). World frame (z up) [m].
+repeated from the same spot to the same goal (:func:`repeats`, :func:`untried`). A target that map fusion
+merges into another object meanwhile is followed to that object (a step names both); one it removes ends the
+search *found, not reached* with the reason (:meth:`SearchFinish._followed`). World frame (z up) [m].
 """
 
 from __future__ import annotations
@@ -26,6 +28,7 @@ from pipeline.scene import Scene
 from console.session.go_look import looked_from
 from console.session.search_choose import choose_viewpoint
 from console.session.search_moves import BATTERY, PAUSED, STOPPED
+from console.session.session_types import SessionError
 
 SAME = 0.3
 """Starts and goals closer than this [m] make the same route."""
@@ -104,7 +107,9 @@ class SearchFinish:
             if not self._wait_paused():
                 return STOPPED
             here = self._pos()
-            obj = next((o for o in s.scene.objects if o.id == obj.id), obj)  # as mapped now
+            obj, end = self._followed(obj)  # as mapped now: merged away, the object it was merged into
+            if end:
+                return end
             grid = self._grids.grid(s, "closed")
             try:
                 _, app = goal_beside(s.scene, grid, obj.id, here, Route(grid, here, s.weights))
@@ -165,6 +170,31 @@ class SearchFinish:
                        "from here", level="warning")
             self._capture(f"after the move beside {obj.id} stopped")
         return "found but the move beside it failed"
+
+    def _followed(self, obj: Any) -> tuple[Any, str | None]:
+        """The found target as mapped now: itself, or the object map fusion merged it into (followed through
+        later merges by the session's :meth:`~console.session.object_follow.ObjectFollow.resolve_object`, as
+        the console's selection and goals are; a step names both and the result's target becomes the
+        survivor). ``(object, None)``, or ``(obj, end)`` with the search's end when it was removed from the
+        map (the reason given)."""
+        s = self._session
+        now = next((o for o in s.scene.objects if o.id == obj.id), None)
+        resolve = getattr(s, "resolve_object", None)
+        if now is not None or resolve is None:
+            return (now if now is not None else obj), None
+        try:
+            oid = resolve(obj.id)
+        except SessionError as exc:
+            return obj, f"found, not reached: {exc}"
+        kept = next((o for o in s.scene.objects if o.id == oid), None)
+        if kept is None:  # the map changed again meanwhile: the next pass resolves it
+            return obj, None
+        r = self.result
+        if r is not None:
+            r.target_id, r.target_position = kept.id, [round(v, 3) for v in kept.position]
+        self._step("seen", f"{obj.id} was merged into {kept.id} (one object mapped twice): going beside {kept.id}",
+                   target_id=kept.id)
+        return kept, None
 
     def _take_look(self, look: Any, obj_id: str, here: Sequence[float]) -> str | None:
         """Go to a look's seen-free spot, face its heading and capture. The search's end when the move
