@@ -287,7 +287,11 @@ def cmd_console(args: argparse.Namespace) -> int:
                 raise CliError(f"cannot start the console: {exc}") from None
             raise
         host = getattr(app, "mcp_host", None)
-        app.serve_forever(ready=lambda: print(f"MorphoNavi console: open {app.url} in a browser (Ctrl-C to stop)"
+        from console.cli.port_note import moved_port_line
+
+        moved = moved_port_line(args.port, app.server.get_port())  # viser took the next free port: say so
+        app.serve_forever(ready=lambda: print((f"{moved}\n" if moved else "")
+                                              + f"MorphoNavi console: open {app.url} in a browser (Ctrl-C to stop)"
                                               + (f"\nMCP server for agents: {host.url}" if host is not None else ""),
                                               flush=True))
     finally:

@@ -66,6 +66,11 @@ def cmd_replay(args: argparse.Namespace) -> int:
     names = " ".join(str(f) for f in args.file)
     if app.recording.salvaged:
         print(f"{names}: salvaged: {app.recording.salvage_note}; replaying {app.recording.duration:.1f} s", flush=True)
+    from console.cli.port_note import moved_port_line
+
+    moved = moved_port_line(args.port, app.server.get_port(), "replay")  # viser took the next free port: say so
+    if moved:
+        print(moved, flush=True)
     print(f"MorphoNavi replay of {names}: open {app.url} in a browser (Ctrl-C to stop)", flush=True)
     app.serve_forever()
     return 0
