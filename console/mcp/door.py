@@ -348,6 +348,8 @@ class AgentDoor:
         from planner.object_goal import ObjectGoalError, goal_beside
         from planner.route import Route
 
+        from console.mcp.object_names import ObjectGone, followed_object
+
         name = _text(args, "object", NAME_MAX, required=True)
         why = _text(args, "why", WHY_MAX)
         s = self.session
@@ -355,12 +357,16 @@ class AgentDoor:
         start = tuple(snap.registered[-1][-1]) if snap.registered else snap.start
         grid = s.grid
         try:
-            obj, app = goal_beside(s.scene, grid, name, start, Route(grid, start, s.weights))
-        except ObjectGoalError as exc:
+            oid, merged = followed_object(s, name)  # an id merged away: the object it was merged into
+            obj, app = goal_beside(s.scene, grid, oid, start, Route(grid, start, s.weights))
+        except (ObjectGoalError, ObjectGone) as exc:
             raise AgentError(f"object: {exc}") from None
         how = {"walk": "walking", "fly": "flying over what is in the way"}.get(app.mode, app.mode)
-        out = self._plan(tuple(float(v) for v in app.goal), f"{obj.label.replace('_', ' ')} {obj.id} (beside it, by {how})", why)
+        out = self._plan(tuple(float(v) for v in app.goal), f"{obj.label.replace('_', ' ')} {obj.id} (beside it, by {how})"
+                         + (f"; {merged}" if merged else ""), why)
         out["object"] = {"id": obj.id, "label": obj.label}
+        if merged:
+            out["merged"] = f"{merged}: planned beside {obj.id}"
         return out
 
     def _plan(self, goal: tuple[float, float, float], what: str, why: str) -> dict[str, Any]:
