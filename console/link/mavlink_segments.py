@@ -32,6 +32,7 @@ import numpy as np
 from planner.mission import SegmentKind
 
 from console.link.base import LinkError, LinkTimeout, RunStatus, SegmentRun
+from console.link.closing_speed import ClosingTrack
 from console.link.mavlink_commands import Commander, Stopped
 from console.link.mavlink_config import MavlinkConfig
 from console.link.mavlink_authority import VehicleInControl
@@ -52,12 +53,6 @@ STILL_DWELL = 0.3
 
 YAW_TOLERANCE = math.radians(5.0)
 """How close [rad] the vehicle's heading (ATTITUDE yaw) must come to a turn's heading."""
-
-PROGRESS_WINDOW = 2.0
-"""Window [s] over which the measured closing speed towards a waypoint is taken (motion time-outs)."""
-
-MIN_CLOSING_SPEED = 0.05
-"""Below this closing speed [m/s] a vehicle past its motion time-out counts as not progressing."""
 
 TURN_RATE_EXPECTED = math.radians(30.0)
 """The slowest yaw rate [rad/s] a turn's time-out allows for (ArduCopter's ATC_RATE_Y_MAX is
@@ -147,7 +142,7 @@ class SegmentExecutor:
         speeds; a vehicle that stopped closing in times out."""
         period = 1.0 / self.config.setpoint_rate
         deadline = time.monotonic() + timeout
-        track: list[tuple[float, float]] = []  # (monotonic [s], remaining [m]) of the last PROGRESS_WINDOW
+        track = ClosingTrack()  # remaining [m] over the last PROGRESS_WINDOW (console/link/closing_speed.py)
         while True:
             if cancel.is_set():
                 raise Stopped()
@@ -163,30 +158,16 @@ class SegmentExecutor:
                 if done(here):
                     return
                 if remaining is not None:
-                    now = time.monotonic()
-                    track.append((now, remaining(here)))
-                    while len(track) > 2 and now - track[1][0] >= PROGRESS_WINDOW:
-                        track.pop(0)
+                    track.add(time.monotonic(), remaining(here))
             if time.monotonic() > deadline:
-                later = self._slower_deadline(track, what, commanded)
+                later = track.later_deadline(time.monotonic(), self.config.timeout_factor, self.config.timeout_slack)
                 if later is None:
                     raise LinkTimeout(f"{what} not reached within {timeout:.0f} s")
-                deadline = later
+                deadline, closing = later
+                if commanded is not None:
+                    self.telemetry.warn("slow", f"{what}: the vehicle flies at {closing:.2f} m/s, {commanded:.2f} m/s "
+                                                "was commanded: its time-out follows the measured speed")
             cancel.wait(period)
-
-    def _slower_deadline(self, track: list[tuple[float, float]], what: str, commanded: float | None) -> float | None:
-        """A new deadline from the measured closing speed over the last window, or None (no progress)."""
-        if len(track) < 2 or track[-1][0] - track[0][0] < 0.5 * PROGRESS_WINDOW:
-            return None
-        (t0, d0), (t1, d1) = track[0], track[-1]
-        closing = (d0 - d1) / (t1 - t0)
-        if closing < MIN_CLOSING_SPEED:
-            return None
-        cfg = self.config
-        if commanded is not None:
-            self.telemetry.warn("slow", f"{what}: the vehicle flies at {closing:.2f} m/s, {commanded:.2f} m/s was "
-                                        "commanded: its time-out follows the measured speed")
-        return time.monotonic() + d1 / closing * max(cfg.timeout_factor, 1.0) + cfg.timeout_slack
 
     def _speeds(self, ground: bool, cancel: threading.Event) -> None:
         """Velocity targets carry their speed (sent here too); position targets get theirs once position
