@@ -4,7 +4,9 @@ It speaks MCP over stdio (what desktop clients start) or, with ``--http PORT``, 
 127.0.0.1, and forwards every tool to the console whose session folder is ``--session`` (default
 ``.morphonavi/session``) through that console's loopback control API (:mod:`console.mcp.control_api`).
 Reading and the safety tools (Hold, Land here, Return) are always on; the proposal tools only with
-``--allow-actions``, and then every action waits for the operator's Approve in the console.
+``--allow-actions``, and then every action waits for the operator's Approve in the console. With no
+console running on ``--session`` it stops at once, saying so in one line (exit status 2); once attached it
+outlives console restarts.
 Registered by :mod:`console.cli.morphonavi`. Nothing is printed on stdout but MCP (stdio).
 """
 
@@ -59,14 +61,13 @@ def cmd_mcp(args: argparse.Namespace) -> int:
     bridge = ConsoleBridge(session, args.allow_actions)
     try:
         status = bridge.call("status")
-    except ConsoleUnavailable as exc:  # the server still starts: the tools say the same until a console runs
-        print(f"morphonavi mcp: warning: {exc}", file=sys.stderr)
-    else:
-        real = status.get("real_vehicle_link") and not status.get("proposals_allowed_on_this_link")
-        print(f"morphonavi mcp: attached to the console on {session} (robot {status.get('robot')}); "
-              f"proposal tools {'on' if args.allow_actions else 'off (--allow-actions)'}"
-              + ("; the console refuses proposals on this real vehicle link (console --agent-real-vehicle)" if real
-                 and args.allow_actions else ""), file=sys.stderr)
+    except ConsoleUnavailable as exc:  # nothing to attach to: one line, exit status 2 (once attached, the
+        raise CliError(str(exc)) from None  # bridge finds a restarted console again)
+    real = status.get("real_vehicle_link") and not status.get("proposals_allowed_on_this_link")
+    print(f"morphonavi mcp: attached to the console on {session} (robot {status.get('robot')}); "
+          f"proposal tools {'on' if args.allow_actions else 'off (--allow-actions)'}"
+          + ("; the console refuses proposals on this real vehicle link (console --agent-real-vehicle)" if real
+             and args.allow_actions else ""), file=sys.stderr)
     server = make_server(bridge, allow_actions=args.allow_actions)
     if args.http is None:
         server.run("stdio")
@@ -88,7 +89,8 @@ def add_mcp_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser: 
         description="Serve the Model Context Protocol to a language-model agent (Claude Desktop, Codex, local "
                     "models) attached to the running console of --session: read the map, the robot and the mission; "
                     "Hold, Land here and Return at once; with --allow-actions propose paths, captures and missions "
-                    "that the operator approves or rejects in the console. Speaks stdio unless --http PORT.")
+                    "that the operator approves or rejects in the console. Speaks stdio unless --http PORT. Stops "
+                    "with exit status 2 when no console runs on --session.")
     p.add_argument("--session", type=Path, default=DEFAULT_SESSION, metavar="DIR",
                    help=f"session folder of the running console (default {DEFAULT_SESSION})")
     p.add_argument("--allow-actions", action="store_true",

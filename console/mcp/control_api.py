@@ -19,6 +19,8 @@ import json
 import logging
 import os
 import secrets
+import shlex
+import socket
 import threading
 import urllib.error
 import urllib.request
@@ -125,6 +127,30 @@ class ControlAPI:
         return 200, {"ok": True, "result": result}
 
 
+def _quoted(path: Path) -> str:
+    """``path`` as typed in a shell command (quoted when it holds spaces or the like)."""
+    return shlex.quote(str(path))
+
+
+def _words(exc: BaseException) -> str:
+    """An OS error's reason in words, without its errno (``connection refused``, ``timed out``)."""
+    reason = getattr(exc, "reason", exc)  # urllib's URLError wraps the socket's error
+    if isinstance(reason, (TimeoutError, socket.timeout)):
+        return "timed out"
+    text = getattr(reason, "strerror", None) or str(reason) or type(reason).__name__
+    return str(text).lower()
+
+
+def _not_answering(session_dir: Path, url: str, exc: BaseException, hint: str) -> str:
+    """Why the console of ``session_dir`` did not answer at ``url``, and what to do, in one line."""
+    why = _words(exc)
+    if why == "timed out":
+        return (f"the console on the session folder {session_dir} did not answer at {url} within {CALL_TIMEOUT:.0f} s "
+                "(busy or stopped): try again, or restart it")
+    return (f"no console is running on the session folder {session_dir} ({AGENT_FILE} names {url}, which does not "
+            f"answer: {why}): {hint}")
+
+
 class LocalBridge:
     """Calls a door in this process (``console --mcp``)."""
 
@@ -143,16 +169,23 @@ class ConsoleBridge:
         self.allow_actions = bool(allow_actions)
         self._where: tuple[str, str] | None = None
 
+    def _start_hint(self) -> str:
+        return f"start one with `morphonavi console --session {_quoted(self.session_dir)}`"
+
     def _find(self) -> tuple[str, str]:
         f = self.session_dir / AGENT_FILE
         try:
             data = json.loads(f.read_text(encoding="utf-8"))
             url, token = str(data["url"]), str(data["token"])
         except FileNotFoundError:
-            raise ConsoleUnavailable(f"no console is running on the session folder {self.session_dir} (no {AGENT_FILE}): "
-                                     "start `morphonavi console` (with the same --session) first") from None
-        except (OSError, ValueError, KeyError, TypeError) as exc:
-            raise ConsoleUnavailable(f"{f}: unreadable ({exc}); restart the console") from None
+            raise ConsoleUnavailable(f"no console is running on the session folder {self.session_dir}: "
+                                     f"{self._start_hint()}") from None
+        except OSError as exc:
+            raise ConsoleUnavailable(f"{f}: cannot read it ({_words(exc)}): read it as the user who started the "
+                                     "console, or restart the console") from None
+        except (ValueError, KeyError, TypeError) as exc:
+            raise ConsoleUnavailable(f"{f}: not the address file a console writes ({type(exc).__name__}): restart "
+                                     f"the console (`morphonavi console --session {_quoted(self.session_dir)}`)") from None
         if not url.startswith("http://127.0.0.1:"):
             raise ConsoleUnavailable(f"{f}: the control API must be on 127.0.0.1, got {url!r}")
         return url, token
@@ -175,8 +208,7 @@ class ConsoleBridge:
             except (urllib.error.URLError, ConnectionError, TimeoutError) as exc:
                 if not attempt:
                     continue
-                raise ConsoleUnavailable(f"the console on {self.session_dir} does not answer at {url} ({exc}): "
-                                         "is it still running?") from None
+                raise ConsoleUnavailable(_not_answering(self.session_dir, url, exc, self._start_hint())) from None
             if not answer.get("ok"):
                 raise AgentError(str(answer.get("error", "refused")))
             return answer.get("result")

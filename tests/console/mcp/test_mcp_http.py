@@ -1,12 +1,11 @@
 """``console --mcp PORT``: the MCP server inside the console over streamable HTTP (the SDK's own client),
-read tools only unless ``--mcp-allow-actions``; the last photo as image content; floods refused; and
-``morphonavi mcp`` with no console running says what to do. Skipped without the ``mcp`` package."""
+read tools only unless ``--mcp-allow-actions``; the last photo as image content; floods refused (``morphonavi mcp``
+with no console running: tests/console/cli/test_mcp_no_console.py). Skipped without the ``mcp`` package."""
 
 from __future__ import annotations
 
 import base64
 import json
-import sys
 from pathlib import Path
 
 import pytest
@@ -15,7 +14,6 @@ from console.app import ConsoleApp, ConsoleConfig, wait_until
 from console.link.world import paper_room
 
 mcp = pytest.importorskip("mcp.client.session", reason="the mcp package is not installed (pip install 'mcp>=2.3,<3')")
-REPO = Path(__file__).resolve().parents[3]
 DEADLINE = 120.0  # [s] generous: the machine may be loaded
 READ_AND_SAFETY = {"get_scene_summary", "get_scene_graph", "list_objects", "get_robot_state", "get_mission_state",
                    "get_last_photo", "get_unseen_space", "get_recent_events", "hold", "land_here", "return_to_launch"}
@@ -80,24 +78,3 @@ def test_an_agent_flooding_proposals_is_rate_limited(tmp_path: Path) -> None:
             door.call("propose_capture_and_map", {"why": "and again"}, allow_actions=True)
     finally:
         door.close()
-
-
-def test_morphonavi_mcp_without_a_console_tells_the_agent_what_to_do(tmp_path: Path) -> None:
-    import anyio
-    from mcp.client.session import ClientSession
-    from mcp.client.stdio import StdioServerParameters, stdio_client
-
-    folder = tmp_path / "s"
-    folder.mkdir()
-
-    async def agent() -> str:
-        params = StdioServerParameters(command=sys.executable, cwd=str(REPO),
-                                       args=["-m", "console.cli.morphonavi", "mcp", "--session", str(folder)])
-        async with stdio_client(params) as (read, write), ClientSession(read, write) as client:
-            await client.initialize()
-            res = await client.call_tool("get_scene_summary", {})
-            assert res.is_error
-            return res.content[0].text
-
-    text = anyio.run(agent)
-    assert f"no console is running on the session folder {folder}" in text and "start `morphonavi console`" in text
