@@ -30,7 +30,7 @@ from console.views.client_notice import tell
 from console.views.object_history import history_lines
 from console.views.object_labels import ClientLabels, LabelSpot
 from console.views.picking import SELECT_MODIFIER, click_intent, typed_number, typed_xyz
-from console.session.session import CAPTURE, SCENE, SELECTION, Session, SessionError
+from console.session.session import SCENE, SELECTION, Session, SessionError
 from console.wording import natural_sorted, plural
 
 log = logging.getLogger(__name__)
@@ -203,9 +203,9 @@ class ObjectsView:
         self._summary = server.gui.add_markdown("")
         self._chooser = server.gui.add_dropdown("Select object", (NONE_CHOICE,), hint="Or click an object in the 3D view")
         self._chooser.on_update(self._on_choose)
+        # its label, state and click belong to console.views.redo_view.RedoView (Undo and Redo together)
         self._undo = server.gui.add_button("Undo", icon=viser.Icon.ARROW_BACK_UP, color="gray", disabled=True,
                                            hint="Undo the last spawn, move, delete, capture or load")
-        self._undo.on_click(self._on_undo)
         with server.gui.add_folder("Selected object", visible=False) as folder:
             self._folder = folder
             self._details = server.gui.add_markdown("")
@@ -227,10 +227,6 @@ class ObjectsView:
 
     # --- drawing --------------------------------------------------------------------------------
     def _on_event(self, topic: str, _payload: Any) -> None:
-        if topic in (SCENE, CAPTURE):
-            what = self._session.undo_label
-            self._undo.disabled = what is None
-            self._undo.label = "Undo" if what is None else f"Undo {what}"[:40]
         if topic == SCENE:
             self.redraw()
         elif topic == SELECTION:
@@ -432,12 +428,6 @@ class ObjectsView:
             tell(event.client, "Cannot move", str(exc), "red")
             return
         tell(event.client, f"Moved {obj.label}", "; ".join(notes) or "grid rebuilt", color="blue")
-
-    def _on_undo(self, event: Any) -> None:
-        try:
-            tell(event.client, "Undone", self._session.undo_edit().removeprefix("undone: "), "blue")
-        except SessionError as exc:
-            tell(event.client, "Cannot undo", str(exc), "red")
 
     def _on_delete(self, event: Any) -> None:
         obj = self._session.selected

@@ -1,7 +1,7 @@
 """Redo beside Undo, and the keyboard: Ctrl+Z undoes, Ctrl+Shift+Z redoes (Cmd on a Mac).
 
-The Undo button belongs to the objects panel (:class:`console.views.objects_view.ObjectsView`); the
-Redo button is placed right after it (viser orders a container's elements by ``order``), and both
+The Undo button sits in the objects panel (:class:`console.views.objects_view.ObjectsView` makes it);
+this view owns its label, state and click as it owns Redo's. The Redo button is placed right after it (viser orders a container's elements by ``order``), and both
 keys are viser commands (also listed in its command palette, Ctrl+K). The session does the work
 (:meth:`console.session.session.Session.undo_edit` / ``redo_edit``). Both buttons say what they would do
 (``Undo move box-3``, ``Redo move box-3``) and are off when there is nothing to do; they are set when the
@@ -46,6 +46,8 @@ class RedoView:
             server.gui.add_command("Redo map edit", description="Put back the edit Undo took away",
                                    hotkey="Z", modifier="cmd/ctrl+shift", icon=viser.Icon.ARROW_FORWARD_UP),
         ]
+        if undo_button is not None:
+            undo_button.on_click(lambda e: self.undo(e.client))
         self._keys[0].on_trigger(lambda e: self.undo(e.client))
         self._keys[1].on_trigger(lambda e: self.redo(e.client))
         session.subscribe(self._on_event)

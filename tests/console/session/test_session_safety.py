@@ -311,11 +311,13 @@ def test_the_undo_button_names_the_step_and_undoes_it(tmp_path: Path) -> None:
     import viser
 
     from console.views.objects_view import ObjectsView
+    from console.views.redo_view import RedoView
 
     server = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
     try:
         s = Session(tmp_path / "s", start=START)
         view = ObjectsView(server, s)
+        keys = RedoView(server, s, view._undo)  # owns the Undo button's label, state and click
         assert view._undo.disabled
         s.spawn(_boxes(), origin="file room.json")
         s.delete_object("box-4")
@@ -330,11 +332,11 @@ def test_the_undo_button_names_the_step_and_undoes_it(tmp_path: Path) -> None:
         class Click:
             client = Tab()
 
-        view._on_undo(Click())
+        keys.undo(Click().client)
         assert "box-4" in {o.id for o in s.scene.objects} and view._undo.label == "Undo spawn from file room.json"
-        view._on_undo(Click())
+        keys.undo(Click().client)
         assert s.scene.objects == () and view._undo.disabled and view.drawn_ids() == []
-        view._on_undo(Click())  # nothing left: refused and said to the tab
+        keys.undo(Click().client)  # nothing left: refused and said to the tab
         assert s.scene.objects == ()
         assert told == ["Undone: delete box-4", "Undone: spawn from file room.json",
                         "Cannot undo: nothing to undo: no map edit left in the history (the last 20 are kept)"]
