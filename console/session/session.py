@@ -51,6 +51,7 @@ from console.wording import plural
 from console.session.merge import merge_observations, merge_report
 from console.session.object_follow import ObjectFollow
 from console.session.operator_session import OperatorRules
+from console.session.pin_edit import PinEdits
 from console.views.picking import click_goal, ray_plane
 from console.session.session_reads import SessionReads
 from console.session.session_store import SESSION_FILE, SESSION_VERSION, Persistence
@@ -72,7 +73,7 @@ __all__ = [
 log = logging.getLogger(__name__)
 
 
-class Session(SessionReads, Persistence, Undo, OperatorRules, KnownSpaceSession, ObjectFollow):
+class Session(SessionReads, Persistence, Undo, OperatorRules, KnownSpaceSession, ObjectFollow, PinEdits):
     """All console state, thread-safe, observable, persisted in one folder (see :class:`Persistence`).
 
     Args:

@@ -5,7 +5,8 @@ Y = up, Z = length along the heading), scaled by ``[w, h, l]`` along those axes,
 and by its yaw about +z, and placed at its box centre (world frame [m]). Labels without a catalog model, or a missing catalog,
 fall back to a plain box. Clicking an object (or choosing it in the list) selects it: its details
 appear in the panel, where it can be moved (typed centre and yaw, or dragged with a gizmo that slides
-it on its support and turns it about +z) or deleted.
+it on its support and turns it about +z), pinned or unpinned (Pin / Unpin: captures never move a pinned
+object; the label follows its state) or deleted.
 """
 
 from __future__ import annotations
@@ -213,9 +214,11 @@ class ObjectsView:
                                                hint="Box centre in the world frame (x, y, z) [m]")
             self._yaw = server.gui.add_number("Yaw [deg]", 0.0, step=5.0, hint="Heading about +z, degrees")
             move = server.gui.add_button("Move", icon=viser.Icon.ARROWS_MOVE, hint="Put the object at the centre and yaw above")
+            self._pin = server.gui.add_button("Pin", icon=viser.Icon.PINNED, color="gray")  # Pin / Unpin: its state
             delete = server.gui.add_button("Delete", color="red", icon=viser.Icon.TRASH)
             close = server.gui.add_button("Deselect", color="gray")
         move.on_click(self._on_move)
+        self._pin.on_click(self._on_pin)
         delete.on_click(self._on_delete)
         close.on_click(lambda _e: self._session.select(None))
         self._selection_box: Any = None
@@ -322,6 +325,7 @@ class ObjectsView:
                 cast_shadow=False, receive_shadow=False,
             )
             self._details.content = describe(obj)
+            self._show_pin(obj)
             self._pos.value = tuple(round(v, 3) for v in obj.position)  # type: ignore[assignment]
             self._yaw.value = round(math.degrees(obj.yaw), 1)
             self._folder.visible = True
@@ -428,6 +432,29 @@ class ObjectsView:
             tell(event.client, "Cannot move", str(exc), "red")
             return
         tell(event.client, f"Moved {obj.label}", "; ".join(notes) or "grid rebuilt", color="blue")
+
+    def _show_pin(self, obj: SceneObject) -> None:
+        """The Pin / Unpin button follows the selected object's state (one button, its label the action)."""
+        label, hint = (("Unpin", "Let captures correct its position again (Undo pins it back)") if obj.is_pinned else
+                       ("Pin", "Keep it where it is: captures that see it never move it"))
+        if self._pin.label != label:
+            self._pin.label, self._pin.icon = label, viser.Icon.PINNED_OFF if obj.is_pinned else viser.Icon.PINNED
+        if self._pin.hint != hint:
+            self._pin.hint = hint
+
+    def _on_pin(self, event: Any) -> None:
+        obj = self._session.selected
+        if obj is None:
+            tell(event.client, "Nothing selected", "click an object first (Shift-click in goal mode)", "yellow")
+            return
+        verb, said = (("unpin", "captures may correct its position again") if obj.is_pinned else
+                      ("pin", "captures never move it"))
+        try:
+            notes = self._session.set_pinned(obj.id, verb == "pin")
+        except SessionError as exc:
+            tell(event.client, f"Cannot {verb}", str(exc), "red")
+            return
+        tell(event.client, f"{verb.capitalize()}ned {obj.id}", "; ".join([said] + notes), "blue")
 
     def _on_delete(self, event: Any) -> None:
         obj = self._session.selected
