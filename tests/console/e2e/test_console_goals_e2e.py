@@ -258,7 +258,6 @@ def test_goals_go_through_objects_typed_goals_top_view_and_the_disconnected_bann
                 return box_ is not None and cam.image_height > 0 and looks_down() and abs(
                     box_["width"] / box_["height"] - cam.image_width / cam.image_height) < 0.01
 
-            assert wait_until(camera_matches_canvas, 30), (cam.image_width, cam.image_height)
             # refusals from earlier clicks: still shown, or shown again later (viser queues notices beyond its limit)
             before = seen_refusals | {" ".join(t.split()) for t in refusals()}
 
@@ -268,11 +267,19 @@ def test_goals_go_through_objects_typed_goals_top_view_and_the_disconnected_bann
                 notices[:] = [t for t in (" ".join(t.split()) for t in refusals()) if t not in before]
                 return _refused_goal(notices)
 
-            click(_project(cam, spot))
             everything = lambda: page.locator(".mantine-Notification-root").all_inner_texts()  # noqa: E731
-            assert wait_until(lambda: top_goal() is not None, 60), (notices[-3:], everything())
-            top = top_goal()
-            assert top is not None and math.dist(top[:2], spot[:2]) < 0.2, (top, spot, notices[-3:])  # under the cursor
+            misses: list[Any] = []
+            for _ in range(3):  # a loaded page can resize its canvas between the camera report and the click
+                assert wait_until(camera_matches_canvas, 30), (cam.image_width, cam.image_height)
+                click(_project(cam, spot))
+                assert wait_until(lambda: top_goal() is not None, 60), (notices[-3:], everything())
+                top = top_goal()
+                if top is not None and math.dist(top[:2], spot[:2]) < 0.2:
+                    break
+                assert session.route_snapshot().candidate_goal is None, (top, spot)  # a goal planned off the cursor
+                misses.append((top, page.locator("canvas").first.bounding_box(), cam.image_width, cam.image_height))
+                before |= set(notices)  # that refusal named another point: click again
+            assert top is not None and math.dist(top[:2], spot[:2]) < 0.2, (top, spot, notices[-3:], misses)  # under the cursor
             page.screenshot(path=str(tmp_path / "top_view.png"))  # for people: tests/ output folder
 
             # --- the server stops: a banner; a console back on the port: gone ---------------------------
