@@ -87,8 +87,12 @@ def camera_source(args: argparse.Namespace) -> object | None:
             check_input_file(args.camera_file, "camera_toml", "--camera-file", also=("dataset_camera",))
         try:
             source = open_camera_source(args.camera, args.camera_file)
-        except (CameraSourceError, CameraError) as exc:
+        except CameraSourceError as exc:
             raise CliError(str(exc)) from None
+        except CameraError as exc:  # the camera file's: named first
+            from console.cli.input_files import named_error
+
+            raise named_error(f"--camera-file {args.camera_file}", args.camera_file, exc) from None
         args._camera_source = source
         from pipeline.camera.horizon import horizon_check
 

@@ -17,6 +17,8 @@ from pipeline.catalog import Catalog, CatalogError
 from pipeline.mapper import MapperConfig, load_mapping_models
 from pipeline.option_values import OptionError, add_model_dir_option, check_model_dir, check_pose_range
 
+from console.cli.input_files import TypedStore
+
 __all__ = ["add_bench_parser", "add_calibrate_parser", "add_map_parser", "cmd_bench", "cmd_calibrate", "cmd_map",
            "load_mapping_models"]
 
@@ -126,34 +128,40 @@ def _check_threads(args: argparse.Namespace) -> None:
 
 
 def _catalog(args: argparse.Namespace) -> Catalog:
-    if args.catalog:
-        from console.cli.input_files import check_input_file
+    """``--catalog`` (the packaged one without it); every refusal names ``--catalog FILE`` first."""
+    if not args.catalog:
+        return Catalog.load()
+    from console.cli.input_files import check_input_file, named_error
 
-        check_input_file(args.catalog, "catalog", "--catalog")
-    return Catalog.load(args.catalog) if args.catalog else Catalog.load()
+    check_input_file(args.catalog, "catalog", "--catalog")
+    try:
+        return Catalog.load(args.catalog)
+    except CatalogError as exc:
+        raise named_error(f"--catalog {args.catalog}", args.catalog, exc) from None
 
 
 # --- map -------------------------------------------------------------------------------------------
 
 
-def _camera_file(path: Path) -> Any:
-    """``--camera-file``: the camera file; a file of another kind is named as what it is."""
+def _camera_file(path: Path, option: str = "--camera-file") -> Any:
+    """``--camera-file`` (or its old name ``--camera``, as typed: ``option``): the camera file; a file of another
+    kind is named as what it is; every refusal names ``option FILE`` first."""
     from pipeline.camera.camera_file import load_camera_toml
     from pipeline.camera.geometry import CameraError
     from pipeline.file_kind import MAX_BYTES, describe_file, read_limited, wrong_kind
 
-    if Path(path).is_file():
-        from console.cli.input_files import check_input_file
+    from console.cli.input_files import check_input_file, named_error
 
-        read_limited(path, MAX_BYTES["camera_toml"], "a camera", "--camera")  # size first
-        check_input_file(path, "camera_toml", "--camera", also=("dataset_camera",))
+    if Path(path).is_file():
+        read_limited(path, MAX_BYTES["camera_toml"], "a camera", option)  # size first
+        check_input_file(path, "camera_toml", option, also=("dataset_camera",))
     try:
         return load_camera_toml(path)
-    except CameraError:
+    except CameraError as exc:
         kind = describe_file(path) if Path(path).is_file() else "unknown"
         if kind not in ("camera_toml", "unknown", "json"):
-            raise _UserError(wrong_kind("", f"--camera {path}", kind, "camera_toml")) from None
-        raise
+            raise _UserError(wrong_kind("", f"{option} {path}", kind, "camera_toml")) from None
+        raise named_error(f"{option} {path}", path, exc) from None
 
 
 def cmd_map(args: argparse.Namespace) -> int:
@@ -167,7 +175,7 @@ def cmd_map(args: argparse.Namespace) -> int:
 
     if args.camera is not None and args.fov is not None:
         raise _UserError("--fov is for photos without a camera file; the camera file's intrinsics are used")
-    from console.cli.input_files import check_input_file
+    from console.cli.input_files import check_input_file, typed_option
     from console.cli.outputs import check_output
 
     if Path(args.image).is_file():  # the argument first; another MorphoNavi file is named as what it is
@@ -178,7 +186,7 @@ def cmd_map(args: argparse.Namespace) -> int:
                        example="scene.json")
     _check_threads(args)  # the options before any note about the photo's camera
     catalog = _catalog(args)
-    camera = _camera_file(args.camera) if args.camera is not None else None
+    camera = _camera_file(args.camera, typed_option(args, "camera", "--camera-file")) if args.camera is not None else None
     if camera is not None:
         from pipeline.camera.horizon import horizon_check
 
@@ -266,6 +274,7 @@ def add_map_parser(subparsers: Any) -> argparse.ArgumentParser:
     )
     p.add_argument("image", help="photo (JPEG, PNG, ...)")
     p.add_argument("--camera-file", "--camera", dest="camera", type=Path, default=None, metavar="CAMERA.toml",
+                   action=TypedStore,
                    help="camera file: camera.toml (intrinsics [px] for the upright image and mount; morphonavi "
                         "calibrate writes one) or a photo's camera JSON (K, width, height, gravity_cam, "
                         "camera_height: the benchmark's form). --camera is the old name (console --camera is a "

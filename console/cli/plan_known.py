@@ -48,8 +48,10 @@ def _known_from(path: Path, what: str) -> Any:
         raise CliError(f"{what} {path}: file not found") from None
     except (OSError, UnicodeDecodeError) as exc:
         raise CliError(f"{what} {path}: cannot read: {getattr(exc, 'strerror', None) or exc}") from None
+    except json.JSONDecodeError as exc:
+        raise CliError(f"{what} {path}: not valid JSON (line {exc.lineno}, column {exc.colno}): {exc.msg}") from None
     except (ValueError, RecursionError) as exc:
-        raise CliError(f"{what} {path}: not JSON ({exc})") from None
+        raise CliError(f"{what} {path}: not usable JSON ({exc})") from None
     if isinstance(data, dict) and "known_space" in data:
         data = data["known_space"]
     elif what == "scene":
