@@ -273,10 +273,12 @@ def test_goals_go_through_objects_typed_goals_top_view_and_the_disconnected_bann
                 return next((g for g in named if math.dist(g[:2], spot[:2]) < 0.2), None)
 
             everything = lambda: page.locator(".mantine-Notification-root").all_inner_texts()  # noqa: E731
-            assert wait_until(camera_matches_canvas, 30), (cam.image_width, cam.image_height)
-            click(_project(cam, spot))
-            assert wait_until(lambda: top_goal() is not None, 60), (spot, session.route_snapshot().candidate_goal,
-                                                                    notices[-3:], everything())
+            for _ in range(5):  # a loaded page can drop a click (each one lands on the same spot: the same goal)
+                assert wait_until(camera_matches_canvas, 30), (cam.image_width, cam.image_height)
+                click(_project(cam, spot))
+                if wait_until(lambda: top_goal() is not None, 20):
+                    break
+            assert top_goal() is not None, (spot, session.route_snapshot().candidate_goal, notices[-3:], everything())
             top = top_goal()
             assert top is not None and math.dist(top[:2], spot[:2]) < 0.2, (top, spot, notices[-3:])  # under the cursor
             page.screenshot(path=str(tmp_path / "top_view.png"))  # for people: tests/ output folder
