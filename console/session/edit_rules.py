@@ -1,9 +1,16 @@
-"""Rules an operator's edit of the map must keep: no object is put where the robot stands.
+"""Rules that keep the map possible: no object where the robot's body is.
 
-An edit (today: Move, typed or dragged) whose box would overlap the robot's body at its current pose is
-refused with the object, the robot's position and its radius named, so a route never starts inside an
-object. The body is :class:`planner.robot_model.RobotModel`'s walking cylinder: ``radius`` around the
-robot's origin, from its origin's height up ``height`` (world frame, z up, metres, radians).
+The body is :class:`planner.robot_model.RobotModel`'s walking cylinder: ``radius`` around the robot's
+origin, from its origin's height up ``height`` (world frame, z up, metres, radians). Each way an object
+comes into the map meets it by what the operator would expect:
+
+- **Move** (typed or dragged) onto the robot is refused, naming the object, the robot's position and its
+  radius (:func:`check_clear_of_robot`), so a route never starts inside an object.
+- **A capture** never sees the body of the robot it is on: an object it maps over the robot's reported
+  pose is a perception error, dropped before the merge with a notice naming it (:func:`drop_over_robot`).
+- **A scene file or a loaded session** is the operator's word: opened as it is, with a warning naming
+  the object; Execute stays off while any object overlaps the robot (:func:`robot_overlap_blocker`,
+  the mission panel says why) until it is moved or deleted (or the robot's position is corrected).
 """
 
 from __future__ import annotations
@@ -11,7 +18,7 @@ from __future__ import annotations
 import math
 from typing import Sequence
 
-from pipeline.scene import SceneObject
+from pipeline.scene import Scene, SceneObject
 from planner.robot_model import MORPHOGEAR, RobotModel
 
 from console.session.session_types import RobotSnapshot, SessionError
@@ -62,4 +69,52 @@ def check_clear_of_robot(obj: SceneObject, robot_xyz: Sequence[float], model: Ro
                            f"({model.radius:.2f} m radius): move the robot first or choose another place")
 
 
-__all__ = ["box_overlaps_body", "check_clear_of_robot", "robot_position"]
+def reported_position(robot: RobotSnapshot | None) -> tuple[float, float, float] | None:
+    """The robot's reported origin (world [m]), ``None`` while no position was ever reported."""
+    if robot is None or not math.isfinite(robot.pose_age):
+        return None
+    x, y, z = (float(v) for v in robot.pose.translation)
+    return x, y, z
+
+
+def objects_on_robot(objects: Sequence[SceneObject], robot_xyz: Sequence[float],
+                     model: RobotModel = MORPHOGEAR) -> list[SceneObject]:
+    """The world-frame objects whose box overlaps the robot's body at ``robot_xyz`` (world [m]), in order."""
+    return [o for o in objects if o.frame == "world" and box_overlaps_body(o.position, o.size, o.yaw, robot_xyz, model)]
+
+
+def _names(objs: Sequence[SceneObject]) -> str:
+    return ", ".join(f"{o.label.replace('_', ' ')} '{o.id}'" for o in objs)
+
+
+def drop_over_robot(scene: Scene, robot: RobotSnapshot | None, what: str,
+                    model: RobotModel = MORPHOGEAR) -> tuple[Scene, str | None]:
+    """``scene`` (a capture's objects, ``what`` names it) without the objects over the robot's body at its
+    reported pose, and the operator's words for what was dropped (``None``: nothing was; no pose: nothing)."""
+    at = reported_position(robot)
+    bad = objects_on_robot(scene.objects, at, model) if at is not None else []
+    if not bad:
+        return scene, None
+    ids = {o.id for o in bad}
+    verb = "was" if len(bad) == 1 else "were"
+    text = (f"{what}: {_names(bad)} mapped over the robot's own body at ({at[0]:.2f}, {at[1]:.2f}) "  # type: ignore[index]
+            f"({model.radius:.2f} m radius) {verb} not added: a camera cannot see the robot it is on, so it is a "
+            "perception error")
+    return scene.with_objects([o for o in scene.objects if o.id not in ids]), text
+
+
+def robot_overlap_blocker(objects: Sequence[SceneObject], robot: RobotSnapshot | None,
+                          model: RobotModel = MORPHOGEAR) -> str | None:
+    """Why Execute is off while a mapped object overlaps the robot's body at its reported pose (a scene
+    file or a loaded session put it there), or ``None``."""
+    at = reported_position(robot)
+    bad = objects_on_robot(objects, at, model) if at is not None else []
+    if not bad:
+        return None
+    verb = "overlaps" if len(bad) == 1 else "overlap"
+    return (f"{_names(bad)} {verb} the robot at ({at[0]:.2f}, {at[1]:.2f}) ({model.radius:.2f} m radius): move or "  # type: ignore[index]
+            "delete it (or correct the robot's position) before running a mission")
+
+
+__all__ = ["box_overlaps_body", "check_clear_of_robot", "drop_over_robot", "objects_on_robot", "reported_position",
+           "robot_overlap_blocker", "robot_position"]

@@ -23,7 +23,7 @@ from planner.landing_spot import return_spots
 from planner.mission import Mission, MissionError
 from planner.route import path_points
 
-from console.session import button_rules, mission_rules
+from console.session import button_rules, edit_rules, mission_rules
 from console.session import operator_state as rules
 from console.session import search_landing
 from console.session.battery_estimate import DrainRate, hover_text
@@ -119,6 +119,8 @@ class OperatorRules:
             note = rules.route_note(self._route.start, origin, len(self._route.registered)) \
                 if not run.active else None  # type: ignore[attr-defined]
             blocker = rules.execute_blocker(self._mission, robot, run, has_runner, ws)  # type: ignore[attr-defined]
+            if blocker is None and self._mission is not None:  # type: ignore[attr-defined]
+                blocker = edit_rules.robot_overlap_blocker(self._scene.objects, robot)  # type: ignore[attr-defined]
             if blocker is None and note is not None:
                 blocker = note
             retired = ("an edit retired this mission: it is being ended" if self._retired_run is not None

@@ -293,10 +293,14 @@ class Session(SessionReads, Persistence, Undo, OperatorRules, KnownSpaceSession,
         snapshot outside the lock (it grows with the objects: seconds for thousands) and is swapped in
         when the map has not changed meanwhile, else merged again (under the lock the third time).
 
-        Raises :class:`SessionError` naming the field of an implausible object; nothing changes then.
+        Raises :class:`SessionError` naming the field of an implausible object; nothing changes then. A
+        capture's objects over the robot's body are dropped, with a notice (:func:`edit_rules.drop_over_robot`).
         """
         what = f" from {origin}" if origin else ""
         self.check_plausible(scene, f"refused{what}")
+        dropped = None
+        if origin.startswith("capture "):  # a camera never sees the robot it is on: a perception error
+            scene, dropped = edit_rules.drop_over_robot(scene, self.robot, origin)
         if not origin.startswith("capture "):
             self._map_given = True  # a scene file or a script's scene: a hand-made map, taken as fully known
         key = origin.replace(" ", ":", 1) if origin.startswith("capture ") else ""  # one undo step with set_capture
@@ -326,6 +330,8 @@ class Session(SessionReads, Persistence, Undo, OperatorRules, KnownSpaceSession,
                    + ([(SELECTION, getattr(self.selected, "id", None))] if reselected else []))
         if follow is not None:  # a candidate chosen by object whose object was merged: beside the survivor
             self._replan_followed(follow)
+        if dropped:
+            self.notify("Mapped object dropped", dropped, "warning")
         return SpawnReport(tuple(added), tuple(updated), tuple(notes))
 
     def delete_object(self, object_id: str) -> list[str]:

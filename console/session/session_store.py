@@ -370,7 +370,7 @@ class Persistence(SessionCore):
         saved = parse_saved(read_session_file(path, self.folder), path.name, self._workspace)
         notes = self._apply_saved(saved, path.name, remember=f"load {path.name}")
         self._emit_all()
-        return notes
+        return notes + self.warn_objects_over_robot(f"session {path.name}")  # type: ignore[attr-defined]
 
     def restore_last(self) -> list[str] | None:
         """Restore ``session.json`` at start-up; ``None`` if nothing was restored.
