@@ -55,12 +55,17 @@ def _overlapping(boxes: list[tuple[str, Any]]) -> list[Any]:
     return [(a, b) for a, b in itertools.combinations(boxes, 2) if overlaps(a[1], b[1], gap=0.0)]
 
 
-def _view(client: Any, eye: np.ndarray, target: np.ndarray) -> None:
-    """Turn the tab's view (the page takes it and reports it back)."""
+def _view(client: Any, labels: Any, reports: list[Any], eye: np.ndarray, target: np.ndarray) -> None:
+    """Turn the tab's view, wait until the page reports it back (``reports``: the poses the page sent), and let the
+    tab's declutter choose for the view the page reported (its own choice on that report runs on viser's pool)."""
+    n = len(reports)
     with client.atomic():
         client.camera.position = tuple(float(v) for v in eye)
         client.camera.look_at = tuple(float(v) for v in target)
-    wait_for(lambda: math.dist(client.camera.position, eye) < 1e-3, "the tab to take the view", 60)
+    want = np.asarray(client.camera.wxyz, dtype=np.float64)
+    wait_for(lambda: any(math.dist(p, eye) < 1e-3 and abs(float(np.dot(q, want))) > 1 - 1e-6 for p, q in reports[n:]),
+             f"the page to report the new view ({reports[n:][-3:]})", 60)
+    labels.refresh(client.client_id)
 
 
 def _draw_boxes(page: Any, canvas: dict[str, float], boxes: list[tuple[str, Any]], scale: float) -> None:
@@ -82,6 +87,9 @@ def test_the_agents_label_gives_way_to_the_robots_in_the_tab_and_never_overlaps(
     s.clear_route()
     page, client = open_tab(browser, app, WIDTH, HEIGHT, ready="Add goal")
     labels = app.views["objects"].labels
+    reports: list[Any] = []  # the views the page reports: (position, wxyz)
+    client.camera.on_update(lambda cam: reports.append((tuple(float(v) for v in cam.position),
+                                                        np.asarray(cam.wxyz, dtype=np.float64))))
     try:
         # the page's 3D canvas is the picture the tab's camera reports: boxes in it are boxes in the page
         wait_for(lambda: (c := page.evaluate(CANVAS_JS)) is not None
@@ -104,7 +112,7 @@ def test_the_agents_label_gives_way_to_the_robots_in_the_tab_and_never_overlaps(
         robot = next(f for f in fixed_labels(app.server) if f.text.startswith("robot"))
         r, a = np.asarray(robot.position, dtype=np.float64), np.asarray(spot.position, dtype=np.float64)
         away = (r - a) / np.linalg.norm(r - a)
-        _view(client, r + 2.5 * away, a)
+        _view(client, labels, reports, r + 2.5 * away, a)
         cam = client.camera
         u, v, _ = project(cam.wxyz, cam.position, float(cam.fov), cam.image_width, cam.image_height, robot.position)
         robot_box = label_rect(robot.text, u, v, px_per_css(cam.image_height), robot.anchor, robot.font_scale)
@@ -122,7 +130,7 @@ def test_the_agents_label_gives_way_to_the_robots_in_the_tab_and_never_overlaps(
         # --- from the side: the agent's label is shown again, clear of the robot's and of every other -------
         mid = (r + a) / 2
         side = np.cross(away, (0.0, 0.0, 1.0))
-        _view(client, mid + 3.0 * side / np.linalg.norm(side) + (0.0, 0.0, 1.0), mid)
+        _view(client, labels, reports, mid + 3.0 * side / np.linalg.norm(side) + (0.0, 0.0, 1.0), mid)
         wait_for(lambda: [t for t, _ in labels.shown(client.client_id, layer="agent")] == [AGENT_LABEL]
                  and not _overlapping(_boxes(app, client)),
                  f"the tab to show the agent's label ({labels.shown(client.client_id)}, "
