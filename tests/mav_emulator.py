@@ -67,6 +67,7 @@ class Record:
     to_others: list[tuple[int, int]] = field(default_factory=list)  # COMMAND_LONGs for other components
     modes: list[str] = field(default_factory=list)  # accepted mode changes, in order
     mode_times: list[tuple[str, float]] = field(default_factory=list)  # (mode, monotonic [s] handled)
+    mode_positions: list[tuple[str, tuple[float, float, float]]] = field(default_factory=list)  # (mode, NED [m] then)
     takeoff_altitudes: list[float] = field(default_factory=list)
     targets: list[tuple[float, float, float, int]] = field(default_factory=list)  # NED + type_mask
     speeds: list[tuple[int, float]] = field(default_factory=list)  # DO_CHANGE_SPEED (type, m/s)
@@ -87,6 +88,10 @@ class Record:
     duplicated: int = 0  # duplicate packets sent
     unsigned_ignored: int = 0  # unsigned messages ignored (signing required)
     timesyncs: int = 0
+    timesync_ts1: int = 0  # ts1 of the last TIMESYNC handled: the GCS's time.monotonic_ns() when it sent it
+    # per position target / mode change: timesync_ts1 when it was handled; it was sent after that (in order)
+    target_sent_after: list[int] = field(default_factory=list)
+    mode_sent_after: list[int] = field(default_factory=list)
 
     @property
     def mode_changes(self) -> list[str]:
@@ -220,6 +225,18 @@ class ArduCopterEmulator(CopterPhysics, VehicleEvents, VehicleCommands):
 
     def __exit__(self, *exc: object) -> None:
         self.stop()
+
+    def flushed(self, timeout: float = 30.0) -> bool:
+        """Wait (up to ``timeout`` [s]) until everything the console's link sent before this call has been
+        handled: a TIMESYNC it sent later was (one socket read in order; the link sends one a second with
+        ``ts1`` = its ``time.monotonic_ns()``, the clock of this same process). Not while blocked or frozen."""
+        since = time.monotonic_ns()
+        deadline = time.monotonic() + timeout
+        while self.record.timesync_ts1 <= since:
+            if time.monotonic() > deadline:
+                return False
+            time.sleep(0.02)
+        return True
 
     def drop_client(self) -> None:
         """With ``url="tcpin:..."``: close the GCS's TCP connection (it may connect again)."""
@@ -390,6 +407,7 @@ class ArduCopterEmulator(CopterPhysics, VehicleEvents, VehicleCommands):
             self._gcs_heartbeat(msg)
         elif kind == "TIMESYNC":
             self.record.timesyncs += 1
+            self.record.timesync_ts1 = max(self.record.timesync_ts1, int(msg.ts1))
             self._timesync(msg)
         elif kind == "COMMAND_LONG":
             if msg.target_component not in (0, 1) or msg.target_system not in (0, self.system):

@@ -55,6 +55,8 @@ class CopterPhysics:
         self.mode = name
         self.record.modes.append(name)
         self.record.mode_times.append((name, time.monotonic()))
+        self.record.mode_positions.append((name, (self.pos[0], self.pos[1], self.pos[2])))
+        self.record.mode_sent_after.append(self.record.timesync_ts1)
         self.record.mode_sources.append((name, by))
         self.vtarget = None
         if name in ("BRAKE", "LOITER", "GUIDED", *RETURNING):
@@ -85,6 +87,7 @@ class CopterPhysics:
         mask = int(m.type_mask)
         self.record.targets.append((float(m.x), float(m.y), float(m.z), mask))
         self.record.target_times.append(time.monotonic())
+        self.record.target_sent_after.append(self.record.timesync_ts1)
         if self.mode != "GUIDED":
             self.record.targets_ignored += 1
             return

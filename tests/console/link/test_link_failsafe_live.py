@@ -17,6 +17,10 @@ from planner.mission import Mission, MissionSegment, SegmentKind
 mav = mavutil.mavlink
 TAKEOFF, FLY = SegmentKind.TAKEOFF, SegmentKind.FLY
 BOUNDS = dict(bounds_min=(0.0, 0.0, 0.0), bounds_max=(10.0, 12.0, 3.0))
+FAILSAFE_AFTER = 3.0
+"""[s] far above a loaded machine's scheduling gaps: the failsafe starts on the fault injected, never before."""
+HEARD_BEFORE_THE_END = 1.5
+"""[s] before the failsafe hold ends the heartbeats come back: room for a late wake-up of the test thread."""
 
 
 def _airborne(link, height: float = 1.5) -> None:
@@ -29,30 +33,33 @@ def _flight(y: float = 9.0) -> Mission:
 
 
 def _frozen_until_the_hold_ends(link, emu, manager, position_back_after: float | None) -> None:
-    """Freeze the vehicle; just before the failsafe hold ends give the heartbeat back (the position
-    stream later, or never)."""
+    """Freeze the vehicle; :data:`HEARD_BEFORE_THE_END` before the failsafe hold ends give the heartbeat
+    back; the position stream ``position_back_after`` [s] after the hold has ended (or never). The hold's
+    end is counted from the failsafe's own event (wall clock), not from when this thread heard of it."""
     emu.frozen = True
-    assert manager.wait(30.0, until=[MissionStatus.FAILSAFE]) is MissionStatus.FAILSAFE
+    assert manager.wait(30.0, until=[MissionStatus.FAILSAFE]) is MissionStatus.FAILSAFE, events(manager)
     failsafe_at = next(e.time for e in manager.events if e.message.startswith("FAILSAFE: robot not heard"))
-    time.sleep(max(0.0, failsafe_at + manager.failsafe_hold - 0.3 - time.time()))
+    hold_end = failsafe_at + manager.failsafe_hold
+    time.sleep(max(0.0, hold_end - HEARD_BEFORE_THE_END - time.time()))
     emu.telemetry_enabled = False
     emu.frozen = False  # heartbeats only
     if position_back_after is not None:
-        time.sleep(position_back_after)
+        time.sleep(max(0.0, hold_end + position_back_after - time.time()))
         emu.telemetry_enabled = True
 
 
 def test_heartbeats_returning_without_a_position_are_not_a_moment_to_land() -> None:
     """The issue's case: the heartbeat is back, no fresh position yet, the hold ends: the console waits
-    for the position (it arrives 0.8 s later) and reports the vehicle as it is: no LAND."""
+    for the position (it arrives 0.5 s after the hold's end, within FRESH_WAIT = 2 s) and reports the
+    vehicle as it is: no LAND."""
     with vehicle(config(fly_speed=1.0)) as (link, emu):
         _airborne(link)
-        manager = mission_manager(link, failsafe_after=0.8, failsafe_hold=2.0, poll=0.01)
+        manager = mission_manager(link, failsafe_after=FAILSAFE_AFTER, failsafe_hold=3.0, poll=0.01)
         manager.start(_flight())
         assert eventually(lambda: emu.pos[0] > 1.0)
-        _frozen_until_the_hold_ends(link, emu, manager, position_back_after=0.8)
+        _frozen_until_the_hold_ends(link, emu, manager, position_back_after=0.5)
         assert manager.wait(30.0, until=[MissionStatus.PAUSED]) is MissionStatus.PAUSED, events(manager)
-        time.sleep(0.5)
+        assert emu.flushed()  # the commands sent so far have reached the vehicle: a LAND among them would show
         assert "LAND" not in emu.record.modes, emu.record.modes
         told = next(m for m in events(manager) if m.startswith("link restored"))
         assert "in the air" in told and "autopilot mode BRAKE" in told, told
@@ -64,7 +71,7 @@ def test_heartbeats_without_a_position_for_long_still_land() -> None:
     stale, and the failsafe lands."""
     with vehicle(config(fly_speed=1.0)) as (link, emu):
         _airborne(link)
-        manager = mission_manager(link, failsafe_after=0.8, failsafe_hold=1.5, poll=0.01)
+        manager = mission_manager(link, failsafe_after=FAILSAFE_AFTER, failsafe_hold=3.0, poll=0.01)
         manager.start(_flight())
         assert eventually(lambda: emu.pos[0] > 1.0)
         _frozen_until_the_hold_ends(link, emu, manager, position_back_after=None)
@@ -76,7 +83,7 @@ def test_heartbeats_without_a_position_for_long_still_land() -> None:
 def test_fresh_state_is_only_built_from_telemetry_received_after_the_call() -> None:
     with vehicle(config(fly_speed=1.0)) as (link, emu):
         emu.frozen = True
-        time.sleep(0.3)
+        assert eventually(lambda: link.link_age_now() > 2.0)  # what was sent before the freeze has been read
         assert link.fresh_state(time.monotonic(), 0.5) is None  # old samples do not count
         emu.frozen = False
         st = link.fresh_state(time.monotonic(), 5.0)
@@ -101,7 +108,7 @@ def test_on_tcp_nothing_reaches_the_vehicle_late_after_a_block() -> None:
         link.connect(timeout=20.0)
         assert eventually(lambda: link.latest_state() is not None and link.latest_state().health == "ok", 30.0)
         _airborne(link)
-        manager = mission_manager(link, failsafe_after=0.8, failsafe_hold=0.6)
+        manager = mission_manager(link, failsafe_after=FAILSAFE_AFTER, failsafe_hold=0.6)
         manager.start(_flight())
         assert eventually(lambda: emu.pos[0] > 1.0)
         emu.blocked = True

@@ -21,6 +21,8 @@ from planner.mission import Mission, MissionSegment, SegmentKind
 mav = mavutil.mavlink
 WALK, TAKEOFF, FLY, LAND = SegmentKind.WALK, SegmentKind.TAKEOFF, SegmentKind.FLY, SegmentKind.LAND
 NAN, INF = float("nan"), float("inf")
+FAILSAFE_AFTER = 3.0
+"""[s] far above a loaded machine's scheduling gaps: the failsafe starts on the fault injected, never before."""
 
 
 def _walk_mission() -> Mission:
@@ -38,7 +40,7 @@ def test_nan_position_is_dropped_the_pose_goes_stale_and_the_walk_stops() -> Non
     """Fault 1: LOCAL_POSITION_NED x = y = NaN mid-walk. The NaN never becomes the pose, the health
     says why, the manager treats the stale pose as link loss and the robot is stopped."""
     with vehicle(config(ground=replace_ground(0.5)), walk_speed=0.5) as (link, emu):
-        manager = mission_manager(link, failsafe_after=1.0, failsafe_hold=0.4)
+        manager = mission_manager(link, failsafe_after=FAILSAFE_AFTER, failsafe_hold=0.4)
         manager.start(_walk_mission())
         assert eventually(lambda: link.latest_state().position[1] > ORIGIN[1] + 0.3)
         emu.corrupt = {"x": NAN, "y": NAN}
@@ -116,7 +118,7 @@ def test_telemetry_stopping_without_a_heartbeat_gap_is_link_loss() -> None:
     land where the robot is (no flight anywhere)."""
     with vehicle() as (link, emu):
         assert link.run_segment(MissionSegment(TAKEOFF, ((2.5, 0.7, 0.0), (2.5, 0.7, 1.5)))).wait(30) is RunStatus.DONE
-        manager = mission_manager(link, failsafe_after=1.0, failsafe_hold=0.5)
+        manager = mission_manager(link, failsafe_after=FAILSAFE_AFTER, failsafe_hold=0.5)
         manager.start(Mission((MissionSegment(FLY, ((2.5, 0.7, 1.5), (2.5, 9.0, 1.5))),),
                               bounds_max=(10.0, 10.0, 3.0)))
         assert eventually(lambda: link.latest_state().position[1] > 2.0)
@@ -273,9 +275,10 @@ def test_a_second_vehicle_is_warned_about_and_ignored() -> None:
 
 def test_takeoff_waits_for_the_position_estimate_instead_of_failing() -> None:
     """Fault 10: Execute before the EKF has a position: the mission waits, then takes off."""
-    with vehicle(faults={"ekf_ready": False}, wait_ok=False) as (link, emu):
+    # the LAND waits for a heartbeat (5 Hz) received after it decided: a time-out later than the next one
+    with vehicle(config(heartbeat_timeout=3.0), faults={"ekf_ready": False}, wait_ok=False) as (link, emu):
         assert eventually(lambda: link.latest_state() is not None)
-        manager = mission_manager(link, failsafe_after=1.5, failsafe_hold=0.5)
+        manager = mission_manager(link, failsafe_after=FAILSAFE_AFTER, failsafe_hold=0.5)
         manager.start(Mission((MissionSegment(TAKEOFF, ((2.5, 0.7, 0.0), (2.5, 0.7, 1.5))),
                                MissionSegment(LAND, ((2.5, 0.7, 1.5), (2.5, 0.7, 0.0))))))
         assert eventually(lambda: any("waiting for the robot's position" in m for m in events(manager)))
@@ -290,7 +293,7 @@ def test_takeoff_waits_for_the_position_estimate_instead_of_failing() -> None:
 def test_a_vehicle_that_never_gets_ready_pauses_the_mission_with_its_reasons() -> None:
     with vehicle(faults={"ekf_ready": False}, wait_ok=False) as (link, emu):
         assert eventually(lambda: link.latest_state() is not None and link.latest_state().readiness)
-        manager = mission_manager(link, failsafe_after=1.5, failsafe_hold=0.5, ready_timeout=1.0)
+        manager = mission_manager(link, failsafe_after=FAILSAFE_AFTER, failsafe_hold=0.5, ready_timeout=1.0)
         manager.start(Mission((MissionSegment(TAKEOFF, ((2.5, 0.7, 0.0), (2.5, 0.7, 1.5))),)))
         assert manager.wait(30.0) is MissionStatus.PAUSED
         message = manager.progress().message
