@@ -37,9 +37,9 @@ runs the steps; the association is :mod:`pipeline.mapping.map_association`, an o
    class, that now overlap in footprint and height are one object mapped twice (a false or partial
    box beside a real one started the second): the older keeps its id and takes the other's
    observations, unless one capture detected both whole, apart; pinned objects are left alone. An
-   object the capture should have seen (in view, nothing mapped in front) and did not gets a miss
-   (:mod:`pipeline.mapping.map_misses`): one seen by a single capture is removed after two (one if seen
-   only in part), one seen only in part by ``n`` captures after ``n``. An update that carried a centre out of the workspace keeps it at the edge.
+   object the capture showed (in view, unhidden, in range) and did not detect gets a miss
+   (:mod:`pipeline.mapping.map_misses`); one whose existence log-odds (its detections for it, its misses
+   against it: :mod:`pipeline.mapping.map_existence`) falls below 0 is removed. An update that carried a centre out of the workspace keeps it at the edge.
 6. **Support** (:mod:`pipeline.mapping.map_support`): a floor-standing class rests on the floor or on the
    object under it; a floating or buried estimate is corrected and flagged.
 7. **Consistency** (:mod:`pipeline.mapping.map_consistency`): a capture whose objects match nothing the map
@@ -185,8 +185,8 @@ def fuse(scene: Scene, observations: Scene, *, catalog: Any = None, config: Fusi
     merged = merge_overlapping(objects, touched, keys, cfg.min_overlap, cfg.min_vertical,
                                lambda a, b: refit(a, history_of(a, captures) + history_of(b, captures), a),
                                {o.id for o in scene.objects})
-    record_misses(objects, observations.captures, touched | {o.object_id for o in outcomes if o.object_id})
-    removed = drop_unconfirmed(objects)
+    missed = record_misses(objects, observations.captures, touched | {o.object_id for o in outcomes if o.object_id})
+    removed = drop_unconfirmed(objects, captures, set(missed))
     corrections = [] if bounds is None else keep_inside(objects, touched, bounds[0], bounds[1])
     corrections += _support(objects, touched)
     known = {c.id for c in scene.captures}

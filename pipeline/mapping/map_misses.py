@@ -1,30 +1,36 @@
-"""Objects a capture should have seen and did not: a false detection seen once does not stay in the map.
+"""Objects a capture should have seen and did not: a false detection does not stay in the map.
 
 Pure helpers of :func:`pipeline.mapping.map_fusion.fuse`. World frame (z up) [m]; a capture's camera
 pose is ``world <- camera`` (OpenCV optical frame, see :class:`~pipeline.scene.Capture`).
 
 A detector's false box (a patch of floor read as a chair) becomes an object like any other: one view
-cannot tell it from a real object seen once. Later captures can: when a capture's view holds the
-object's centre in range (:func:`~pipeline.mapping.map_consistency.expected_in_view`), no other mapped
-object stands on the line of sight to it (:func:`line_of_sight_clear`) and none of the capture's
-detections matched it, the capture records a **miss** in the object's history (``used`` false, note
-:data:`MISS_NOTE`). An unpinned object seen by one capture only and missed by :data:`MISSES` later
-captures (one, when that capture saw it only in part) is removed, with the reason in the fusion's
-report; so is one seen only in part by ``n`` captures and missed by ``n`` (two false boxes that happened
-to agree, each read as an occluded object, go after two misses; an object seen whole by two captures stays). A real object seen once and then missed
-twice where nothing hides it would need two missed detections in a row (the noisy simulator misses
-10 % of them), and a view hidden by something unmapped still counts as a miss: hence two, not one.
+cannot tell it from a real object seen once, and two false boxes of two captures may agree. Later
+captures can tell: when a capture shows at least :data:`MIN_MISS_SHARE` of an object's box (in the
+image, within :data:`MAX_MISS_RANGE`, no other mapped object on the line of sight:
+:func:`~pipeline.mapping.map_existence.visible_share`) and none of its detections matched it, it records a
+**miss** in the object's history (``used`` false, note :data:`MISS_NOTE`). The object's existence is then
+weighed (:func:`~pipeline.mapping.map_existence.log_odds`, an occupancy log-odds as OctoMap's): each
+detection counts for it by its score and by how much of the object its view showed, each miss against it
+by how much of the object's place that capture saw; an object whose log-odds falls below 0 is removed,
+with the reason in the fusion's report ("suitcase-3: seen by 2 captures (in part), missed by 2 captures that
+saw its place: removed"). Pinned and operator-placed objects (:attr:`~pipeline.scene.SceneObject.is_pinned`) and
+objects with no detection in their history are never removed.
+
+What that gives: an object seen whole once goes after two clean misses, not one (the noisy simulator misses
+10 % of the detections); one seen only in part (its centre a guess) after one; two partial views that
+agreed after two; a capture whose view of the place is half hidden or half out of the image counts for
+less, and one that shows a place a mapped object hides counts nothing.
 """
 
 from __future__ import annotations
 
 import math
 from dataclasses import replace
-from typing import Sequence
+from typing import Mapping, Sequence
 
 import numpy as np
 
-from pipeline.mapping.map_consistency import expected_in_view
+from pipeline.mapping.map_existence import log_odds, visible_share
 from pipeline.mapping.map_extent import half_extent, ray_interval
 from pipeline.mapping.observation_sigma import CUT_YAW_SIGMA
 from pipeline.scene import Capture, SceneObject, Sighting
@@ -32,14 +38,12 @@ from pipeline.scene import Capture, SceneObject, Sighting
 MISS_NOTE = "in view and not detected"
 """History note of a capture that should have seen the object and did not."""
 
-MISSES = 2
-"""Misses after which an object seen whole by one capture only is removed (one per capture that saw it
-when every view of it was partial: cut by the border or occluded, its centre a guess)."""
-
 MAX_MISS_RANGE = 4.5
-"""Farthest camera-to-centre distance [m] at which a capture's silence counts as a miss (the depth
-model's range, :data:`~pipeline.mapping.observation_sigma.DEPTH_RANGE`: farther, a small object may go
-undetected)."""
+"""Farthest camera distance [m] of the part of an object whose absence counts (the depth model's range,
+:data:`~pipeline.mapping.observation_sigma.DEPTH_RANGE`: farther, a small object may go undetected)."""
+
+MIN_MISS_SHARE = 0.25
+"""Least share of an object's box a capture must show (in view, unhidden, in range) to record a miss."""
 
 
 def line_of_sight_clear(camera: Sequence[float], obj: SceneObject, others: Sequence[SceneObject]) -> bool:
@@ -60,22 +64,25 @@ def line_of_sight_clear(camera: Sequence[float], obj: SceneObject, others: Seque
     return True
 
 
-def _seen_by(obj: SceneObject) -> set[str]:
-    return {s.capture for s in obj.history if s.used and s.capture}
+def is_miss(s: Sighting) -> bool:
+    """Whether the history entry is a miss (:data:`MISS_NOTE`)."""
+    return not s.used and s.note == MISS_NOTE
 
 
-def _partial_only(obj: SceneObject) -> bool:
-    """Whether every used view of ``obj`` was cut or occluded (its yaw not trusted: sigma
-    :data:`~pipeline.mapping.observation_sigma.CUT_YAW_SIGMA`)."""
-    return all(s.sigma[2] >= CUT_YAW_SIGMA for s in obj.history if s.used)
+HIDDEN_NOTE = "behind nearer objects"
+"""The words of a sighting's note (:func:`~pipeline.mapping.map_estimate.sighting`, its sigma's factors) that
+say its box lay mostly inside nearer objects' boxes (:data:`~pipeline.mapping.observation_sigma.HIDDEN`)."""
 
 
-def _misses(obj: SceneObject) -> int:
-    return sum(1 for s in obj.history if not s.used and s.note == MISS_NOTE)
+def is_partial(s: Sighting) -> bool:
+    """Whether the view showed only part of the object: cut by the border or read as occluded (its yaw not
+    trusted: sigma :data:`~pipeline.mapping.observation_sigma.CUT_YAW_SIGMA`), or mostly behind nearer
+    objects of its capture (:data:`HIDDEN_NOTE`)."""
+    return s.sigma[2] >= CUT_YAW_SIGMA or HIDDEN_NOTE in s.note
 
 
 def record_misses(objects: list[SceneObject], captures: Sequence[Capture], seen: set[str]) -> list[str]:
-    """Add a miss to each object the ``captures`` should have seen and did not (in place).
+    """Add a miss to each object the ``captures`` showed and did not detect (in place).
 
     Args:
         objects: The map after this capture's updates.
@@ -90,15 +97,13 @@ def record_misses(objects: list[SceneObject], captures: Sequence[Capture], seen:
     for cap in captures:
         if cap.camera_position is None:
             continue
-        for o in expected_in_view(objects, cap):
+        for o in list(objects):
             if o.id in seen or o.is_pinned or cap.id in {s.capture for s in o.history}:
                 continue
-            if math.dist(cap.camera_position, o.position) > MAX_MISS_RANGE:
-                continue
-            if not line_of_sight_clear(cap.camera_position, o, objects):
+            if math.dist(cap.camera_position, o.position) - 0.5 * math.hypot(*o.size) > MAX_MISS_RANGE:
                 continue
             ref = next((s for s in reversed(o.history) if s.used), None)
-            if ref is None:
+            if ref is None or visible_share(o, cap, objects, MAX_MISS_RANGE) < MIN_MISS_SHARE:
                 continue
             miss = Sighting(capture=cap.id, position=o.position, yaw=o.yaw, size=o.size, sigma=ref.sigma,
                             camera=tuple(float(v) for v in cap.camera_position),  # type: ignore[arg-type]
@@ -108,26 +113,42 @@ def record_misses(objects: list[SceneObject], captures: Sequence[Capture], seen:
     return out
 
 
-def drop_unconfirmed(objects: list[SceneObject]) -> list[tuple[str, str]]:
-    """Remove (in place) each unpinned object seen by one capture only and missed by :data:`MISSES` others
-    (one when it was seen in part), and each seen only in part by ``n`` captures and missed by ``n``: the
-    evidence against it outweighs the evidence for it.
+def drop_unconfirmed(objects: list[SceneObject], captures: Mapping[str, Capture] | None = None,
+                     judge: set[str] | None = None) -> list[tuple[str, str]]:
+    """Remove (in place) each unpinned object of ``judge`` (``None``: every object) whose existence log-odds
+    (:func:`~pipeline.mapping.map_existence.log_odds`) fell below 0 after a miss.
+
+    Args:
+        objects: The map.
+        captures: The captures by id (their pose and intrinsics weigh each view); a capture not in it
+            counts its detection whole, its miss clean.
+        judge: Ids to weigh (the fusion passes those that just got a miss).
 
     Returns:
         ``(id, reason)`` per removed object.
     """
+    caps = captures or {}
     out: list[tuple[str, str]] = []
     keep: list[SceneObject] = []
     for o in objects:
-        n, seen = _misses(o), len(_seen_by(o))
-        partial = _partial_only(o)
-        if not o.is_pinned and (seen == 1 or (seen > 1 and partial)) and n >= (1 if partial else MISSES) * seen:
-            by = "one capture only" if seen == 1 else f"{seen} captures"
-            out.append((o.id, f"seen by {by}, then in view and not detected by {n} others: removed"))
-        else:
+        if o.is_pinned or (judge is not None and o.id not in judge) or not any(is_miss(s) for s in o.history):
             keep.append(o)
+            continue
+        others = [p for p in objects if p.id != o.id]
+        total, hits, _ = log_odds(o, caps, others, is_miss, is_partial, MAX_MISS_RANGE)
+        if hits == 0 or total >= 0:
+            keep.append(o)
+            continue
+        saw = {s.capture for s in o.history if s.capture and not is_miss(s)}
+        missed = {s.capture for s in o.history if s.capture and is_miss(s)}
+        part = " (in part)" if all(is_partial(s) for s in o.history if s.capture in saw) else ""
+        by = "one capture only" if len(saw) == 1 else f"{len(saw)} captures"
+        n = len(missed)
+        out.append((o.id, f"seen by {by}{part}, missed by {n} capture{'s' if n > 1 else ''} that saw its place: "
+                          "removed"))
     objects[:] = keep
     return out
 
 
-__all__ = ["MISSES", "MISS_NOTE", "drop_unconfirmed", "line_of_sight_clear", "record_misses"]
+__all__ = ["MAX_MISS_RANGE", "MIN_MISS_SHARE", "MISS_NOTE", "drop_unconfirmed", "is_miss", "is_partial",
+           "line_of_sight_clear", "record_misses"]

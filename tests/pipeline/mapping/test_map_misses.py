@@ -57,7 +57,7 @@ def test_a_false_chair_seen_once_in_part_goes_when_a_capture_looks_and_sees_noth
     after, report = fuse(scene, look)
     assert [o.id for o in after.objects] == ["office_chair-1"]
     assert report.removed and report.removed[0][0] == "office_chair-2"
-    assert ("office_chair-2: seen by one capture only, then in view and not detected by 1 others: removed"
+    assert ("office_chair-2: seen by one capture only (in part), missed by 1 capture that saw its place: removed"
             in report.notes())
 
 
@@ -82,8 +82,8 @@ def test_an_object_seen_whole_needs_two_misses_and_a_hidden_one_none() -> None:
 
 
 def test_a_false_chair_two_captures_saw_in_part_goes_after_two_misses_a_whole_desk_stays() -> None:
-    """Evidence counted: an object seen only in part by two captures (two false boxes that agreed, as the
-    noisy tour's suitcase) goes once two captures look and see nothing; one seen whole by two captures stays."""
+    """Evidence weighed: an object seen only in part by two captures (two false boxes that agreed) goes once two
+    captures look and see nothing; one seen whole by two captures stays after three (test_map_existence.py)."""
     false = [_obj("office_chair-1", "office_chair", (1.75 + 0.05 * k, 2.33, 0.525), CHAIR, f"bad-{k}",
                   (375, 331, 489, 429)) for k in range(2)]
     scene = Scene()
@@ -96,13 +96,13 @@ def test_a_false_chair_two_captures_saw_in_part_goes_after_two_misses_a_whole_de
     assert [o.id for o in once.objects] == ["office_chair-1"] and not report.removed
     twice, report = fuse(once, looks[1], check_consistency=False)
     assert twice.objects == () and [r[0] for r in report.removed] == ["office_chair-1"]
-    assert "then in view and not detected by 2 others: removed" in report.removed[0][1]
+    assert "missed by 2 captures that saw its place: removed" in report.removed[0][1]
 
     desk = Scene()
     for k in range(2):
         desk, _ = fuse(desk, _capture(f"seen-{k}", (1.2 + 0.1 * k, 0.8, 0.35), math.pi / 2,
                                       _obj("desk-1", "desk", (1.2, 2.95, 0.375), DESK, f"seen-{k}", (200, 150, 420, 330))))
-    for cap in looks:
+    for cap in looks[:3]:
         desk, report = fuse(desk, cap, check_consistency=False)
-    assert [o.id for o in desk.objects] == ["desk-1"]  # seen whole by two captures: misses do not remove it
-    assert sum(1 for s in desk.object("desk-1").history if s.note == MISS_NOTE) == 4
+    assert [o.id for o in desk.objects] == ["desk-1"]  # seen whole by two captures: three misses do not remove it
+    assert sum(1 for s in desk.object("desk-1").history if s.note == MISS_NOTE) == 3
