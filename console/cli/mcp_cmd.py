@@ -5,8 +5,9 @@ It speaks MCP over stdio (what desktop clients start) or, with ``--http PORT``, 
 ``.morphonavi/session``) through that console's loopback control API (:mod:`console.mcp.control_api`).
 Reading and the safety tools (Hold, Land here, Return) are always on; the proposal tools only with
 ``--allow-actions``, and then every action waits for the operator's Approve in the console. With no
-console running on ``--session`` it stops at once, saying so in one line (exit status 2); once attached it
-outlives console restarts.
+console running on ``--session``: started from a terminal (or with ``--http``) it stops at once, saying so in
+one line (exit status 2); started by an MCP client (stdin a pipe) it serves and every tool answers that line
+until a console starts (exit status 2 if none ever answered). Once attached it outlives console restarts.
 Registered by :mod:`console.cli.morphonavi`. Nothing is printed on stdout but MCP (stdio).
 """
 
@@ -61,16 +62,23 @@ def cmd_mcp(args: argparse.Namespace) -> int:
     bridge = ConsoleBridge(session, args.allow_actions)
     try:
         status = bridge.call("status")
-    except ConsoleUnavailable as exc:  # nothing to attach to: one line, exit status 2 (once attached, the
-        raise CliError(str(exc)) from None  # bridge finds a restarted console again)
-    real = status.get("real_vehicle_link") and not status.get("proposals_allowed_on_this_link")
-    print(f"morphonavi mcp: attached to the console on {session} (robot {status.get('robot')}); "
-          f"proposal tools {'on' if args.allow_actions else 'off (--allow-actions)'}"
-          + ("; the console refuses proposals on this real vehicle link (console --agent-real-vehicle)" if real
-             and args.allow_actions else ""), file=sys.stderr)
+    except ConsoleUnavailable as exc:
+        if args.http is not None or sys.stdin.isatty():  # a person started it: one line, exit status 2
+            raise CliError(str(exc)) from None
+        # an MCP client started it (stdin is its pipe), maybe before the console: serve, every tool answers
+        # this line until a console starts on the folder (clients do not restart a server that exits)
+        print(f"morphonavi mcp: waiting: {exc}; every tool answers so until then", file=sys.stderr)
+        status = None
+    if status is not None:
+        real = status.get("real_vehicle_link") and not status.get("proposals_allowed_on_this_link")
+        print(f"morphonavi mcp: attached to the console on {session} (robot {status.get('robot')}); "
+              f"proposal tools {'on' if args.allow_actions else 'off (--allow-actions)'}"
+              + ("; the console refuses proposals on this real vehicle link (console --agent-real-vehicle)" if real
+                 and args.allow_actions else ""), file=sys.stderr)
     server = make_server(bridge, allow_actions=args.allow_actions)
     if args.http is None:
         server.run("stdio")
+        return 0 if bridge.answered else 2  # the client left before any console answered: not a success
     else:
         print(f"morphonavi mcp: serving MCP at http://127.0.0.1:{args.http}/mcp (Ctrl-C to stop)", file=sys.stderr)
         try:
@@ -89,8 +97,9 @@ def add_mcp_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser: 
         description="Serve the Model Context Protocol to a language-model agent (Claude Desktop, Codex, local "
                     "models) attached to the running console of --session: read the map, the robot and the mission; "
                     "Hold, Land here and Return at once; with --allow-actions propose paths, captures and missions "
-                    "that the operator approves or rejects in the console. Speaks stdio unless --http PORT. Stops "
-                    "with exit status 2 when no console runs on --session.")
+                    "that the operator approves or rejects in the console. Speaks stdio unless --http PORT. With no "
+                    "console on --session it stops (exit status 2) when started from a terminal or with --http; "
+                    "started by an MCP client it waits, every tool saying so, until a console starts.")
     p.add_argument("--session", type=Path, default=DEFAULT_SESSION, metavar="DIR",
                    help=f"session folder of the running console (default {DEFAULT_SESSION})")
     p.add_argument("--allow-actions", action="store_true",

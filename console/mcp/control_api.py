@@ -168,6 +168,7 @@ class ConsoleBridge:
         self.session_dir = Path(session_dir).expanduser()
         self.allow_actions = bool(allow_actions)
         self._where: tuple[str, str] | None = None
+        self.answered = False  # True once a console answered a call (attached at least once)
 
     def _start_hint(self) -> str:
         return f"start one with `morphonavi console --session {_quoted(self.session_dir)}`"
@@ -209,6 +210,7 @@ class ConsoleBridge:
                 if not attempt:
                     continue
                 raise ConsoleUnavailable(_not_answering(self.session_dir, url, exc, self._start_hint())) from None
+            self.answered = True
             if not answer.get("ok"):
                 raise AgentError(str(answer.get("error", "refused")))
             return answer.get("result")
