@@ -20,6 +20,8 @@ runs the steps; the association is :mod:`pipeline.mapping.map_association`, an o
    view whose side a nearer object of its class hides (a line of boxes seen end-on) finds no object, the
    assignment is tried again with its gate as wide as its extent across the ray
    (:func:`~pipeline.mapping.map_association.assign_capture`).
+   A view that shows an object's top and bottom never joins a floor-standing object on another level of a
+   stack (:func:`~pipeline.mapping.map_association.other_level`).
    An unmatched observation becomes a new object with the next id of its class, above every number the
    class has had in the map's life (:func:`~pipeline.mapping.map_extent.next_id`, the map's ``last_ids``:
    an id freed by a merge or a removal is never given again; existing ids never change), unless it overlaps (in
@@ -41,7 +43,8 @@ runs the steps; the association is :mod:`pipeline.mapping.map_association`, an o
    (:mod:`pipeline.mapping.map_misses`); one whose existence log-odds (its detections for it, its misses
    against it: :mod:`pipeline.mapping.map_existence`) falls below 0 is removed. An update that carried a centre out of the workspace keeps it at the edge.
 6. **Support** (:mod:`pipeline.mapping.map_support`): a floor-standing class rests on the floor or on the
-   object under it; a floating or buried estimate is corrected and flagged.
+   object under it; a floating or buried estimate is corrected and flagged; the objects stacked on a touched
+   one are settled with it.
 7. **Consistency** (:mod:`pipeline.mapping.map_consistency`): a capture whose objects match nothing the map
    expects in view is held back (map unchanged) unless ``check_consistency=False``.
 """
@@ -59,7 +62,7 @@ from pipeline.mapping.map_extent import id_numbers, keep_inside, next_id, outsid
 from pipeline.mapping.map_merge import check_bounds, merge_overlapping, taken_overlap
 from pipeline.mapping.map_misses import drop_unconfirmed, record_misses
 from pipeline.mapping.map_report import EXTENT_NOTE, Action, FusionConfig, FusionReport, Outcome
-from pipeline.mapping.map_support import supported_z
+from pipeline.mapping.map_support import settle
 from pipeline.mapping.observation_sigma import MIN_RANGE, degenerate, distance_to_box, observation_sigma
 from pipeline.scene import Capture, Scene, SceneError, SceneObject
 
@@ -188,27 +191,11 @@ def fuse(scene: Scene, observations: Scene, *, catalog: Any = None, config: Fusi
     missed = record_misses(objects, observations.captures, touched | {o.object_id for o in outcomes if o.object_id})
     removed = drop_unconfirmed(objects, captures, set(missed))
     corrections = [] if bounds is None else keep_inside(objects, touched, bounds[0], bounds[1])
-    corrections += _support(objects, touched)
+    corrections += settle(objects, touched)
     known = {c.id for c in scene.captures}
     new_caps = scene.captures + tuple(c for c in observations.captures if c.id not in known)
     return Scene(objects=tuple(objects), captures=new_caps, last_ids=last_ids), FusionReport(tuple(outcomes), tuple(corrections),
                                                                           merged=tuple(merged), removed=tuple(removed))
-
-
-def _support(objects: list[SceneObject], touched: set[str]) -> list[tuple[str, str]]:
-    """Put the touched floor-standing objects on their support (lowest first); flag each correction."""
-    out: list[tuple[str, str]] = []
-    order = sorted((n for n, o in enumerate(objects) if o.id in touched and not o.is_pinned),
-                   key=lambda n: objects[n].position[2] - objects[n].size[1] / 2)
-    for n in order:
-        o = objects[n]
-        fix = supported_z(o, objects)
-        if fix is None:
-            continue
-        z, what = fix
-        objects[n] = replace(o, position=(o.position[0], o.position[1], z), flags=o.flags + (what,))
-        out.append((o.id, what))
-    return out
 
 
 def pinned(obj: SceneObject, value: bool = True) -> SceneObject:

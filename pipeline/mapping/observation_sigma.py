@@ -58,7 +58,7 @@ from pipeline.mapping.occlusion import HIDDEN_GAP, TOUCH_PX, camera_distance, hi
 from pipeline.scene import Capture, SceneObject, Vec3
 
 __all__ = ["HIDDEN_GAP", "TOUCH_PX", "ObservationSigma", "camera_distance", "degenerate", "distance_to_box",
-           "hidden_share", "observation_sigma", "occluded_sides", "ray_covariance"]
+           "hidden_share", "observation_sigma", "occluded_sides", "ray_covariance", "top_and_bottom_seen"]
 
 METHOD_SIGMA: dict[str, tuple[float, float]] = {
     "ground_truth": (0.02, 0.0),
@@ -160,6 +160,11 @@ class ObservationSigma:
         across_extent: The across-ray floor of a view cut on two or more sides [m] (0 otherwise).
         side_extent: The across-ray floor [m] of a view whose side a nearer object of its class hides
             (:func:`occluded_sides`; 0 otherwise): the gate's when ``wide`` (see :meth:`gate_covariance`).
+        level_seen: The view shows the object's top and bottom (its image box is not cut by the top or
+            bottom border and not much shorter than the class height: :func:`top_and_bottom_seen`), so its
+            height in the world is measured, whatever cuts it on the left or right: the association does not
+            take it for an object on another level of a stack
+            (:func:`pipeline.mapping.map_association.other_level`).
         factors: What grew the sigmas beyond the method's (``near``, ``... behind nearer objects``,
             ``beyond the depth model's range``, ``cut on N sides``), for the object's history.
     """
@@ -175,6 +180,7 @@ class ObservationSigma:
     gate_along: float = math.nan
     across_extent: float = 0.0
     side_extent: float = 0.0
+    level_seen: bool = False
 
     @property
     def weight_sigma(self) -> float:
@@ -309,7 +315,9 @@ def observation_sigma(obj: SceneObject, capture: Capture | None = None,
     along = _given_sigma(obj) or (a + b * dist)
     yaw = YAW_SIGMA.get(obj.source.method, DEFAULT_YAW_SIGMA)
     mapped = obj.source.method not in ("manual", "ground_truth")
-    cut = mapped and (is_cut(obj, capture) or is_occluded(obj, capture, d))
+    occluded = mapped and is_occluded(obj, capture, d)
+    cut = mapped and (is_cut(obj, capture) or occluded)
+    level_seen = mapped and not occluded and top_and_bottom_seen(obj, capture)
     if cut:
         along *= CUT_FACTOR
         yaw = CUT_YAW_SIGMA
@@ -345,7 +353,18 @@ def observation_sigma(obj: SceneObject, capture: Capture | None = None,
         factors.append(f"{hid} side{'s' if hid > 1 else ''} behind a nearer {obj.label}")
     return ObservationSigma(along, across, yaw, dist,
                             None if camera is None else tuple(float(v) for v in camera), cut,  # type: ignore[arg-type]
-                            tuple(factors), partial, gate_along, extent, side_extent)
+                            tuple(factors), partial, gate_along, extent, side_extent, level_seen)
+
+
+def top_and_bottom_seen(obj: SceneObject, capture: Capture | None) -> bool:
+    """Whether the object's image box keeps its top and bottom edges: neither is within
+    :data:`BORDER_PX` of the image's top or bottom border (a cut on the left or right hides neither).
+    ``False`` when the box or the image size is unknown."""
+    size = _image_size(capture)
+    b = obj.source.bbox
+    if size is None or b is None:
+        return False
+    return b[1] > BORDER_PX and b[3] < size[1] - BORDER_PX
 
 
 def distance_to_box(point: Sequence[float], centre: Sequence[float], size: Sequence[float], yaw: float) -> float:
