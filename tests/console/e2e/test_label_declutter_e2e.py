@@ -1,11 +1,16 @@
-"""The agent's label in the per-tab label declutter, in a real headless browser (Playwright, Debian's Chromium) at
-1440 x 900, on the simulated robot after a capture of the paper's room (``conftest.py``):
+"""The agent's label and a replay's viewpoint label in the per-tab label declutter, in a real headless browser
+(Playwright, Debian's Chromium) at 1440 x 900. The agent's, on the simulated robot after a capture of the paper's
+room (``conftest.py``):
 
 - the agent plans a candidate (its door's ``plan_to_point``): "proposed by the agent" is placed at its goal in the
   tab's own declutter (layer ``agent``), not as a label every tab shows;
 - the tab's view is turned so that the robot's label and the agent's sit on one line of sight (the robot's nearer):
   the tab leaves the agent's out, and no two of the labels it draws overlap, the robot's included;
 - the view turned to the side: the tab shows the agent's label again, clear of the robot's and of every other.
+
+The replay's: a search recorded on the simulator (step mode, one approved move), replayed at its last chosen
+viewpoint; from a view where "viewpoint N: gain ..., cost ..." would fall on the robot's label the tab leaves it
+out, from another it shows it, and no two drawn labels overlap.
 
 Label boxes are measured in the page's own picture: the tab's camera as the page reports it (pose, field of view,
 the 3D canvas's size in pixels, checked against the canvas the page lays out), the labels that tab draws, and
@@ -144,3 +149,119 @@ def test_the_agents_label_gives_way_to_the_robots_in_the_tab_and_never_overlaps(
     finally:
         page.close()
         s.clear_route()
+
+
+# --- a replay's viewpoint label -----------------------------------------------------------------------------------
+@pytest.fixture(scope="module")
+def recorded_search(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """A search recorded on the simulator in the paper's room: step mode, one approved move, then Stop."""
+    from console.cli.search_cmd import HeadlessRig
+    from console.link.world_file import paper_world
+    from console.recording.recording import Recorder
+    from console.session.search import SearchConfig
+
+    tmp = tmp_path_factory.mktemp("search_rec")
+    rig = HeadlessRig(paper_world(), tmp / "s", time_scale=8.0)
+    rec = Recorder(rig.session, folder=tmp / "rec").start()
+    try:
+        rig.search.start(SearchConfig("robot dog", mode="step", max_captures=4, target_height=0.4))
+        wait_for(lambda: rig.search.waiting_approval, "the first proposed move", 300)
+        captures = rig.search.result.captures
+        rig.search.approve()
+        wait_for(lambda: rig.search.result.captures > captures or not rig.search.running, "the capture after it", 300)
+        wait_for(lambda: rig.search.waiting_approval or not rig.search.running, "the second proposed move", 300)
+        rig.search.stop()
+        assert rig.search.wait(300)
+    finally:
+        rig.close()
+        rec.close()
+    assert rec.failed is None and rec.paths
+    return rec.paths[0]
+
+
+def _views_through(near: np.ndarray, far: np.ndarray) -> list[tuple[np.ndarray, np.ndarray]]:
+    """Views ``(eye, look-at point)`` [m] from behind ``near``, looking at ``far`` past it: on the line through both
+    and shifted off it by up to 0.3 m (sideways, up, down), 1.5 to 3 m behind ``near``; then views from the side."""
+    back = (near - far) / np.linalg.norm(near - far)
+    side = np.cross(back, (0.0, 0.0, 1.0))
+    side = side / np.linalg.norm(side) if np.linalg.norm(side) > 1e-6 else np.array([1.0, 0.0, 0.0])
+    out = []
+    for d in (1.5, 2.2, 3.0):
+        for dz in (0.0, 0.05, -0.05, 0.1, -0.1, 0.2, -0.2, 0.3, -0.3):
+            for dx in (0.0, 0.05, -0.05, 0.1, -0.1, 0.2, -0.2):
+                out.append((near + d * back + dx * side + (0.0, 0.0, dz), far))
+    mid = (near + far) / 2
+    for sign in (1.0, -1.0):
+        for up in (0.5, 1.0, 2.0):
+            out.append((mid + sign * 3.0 * side + (0.0, 0.0, up), mid))
+    return out
+
+
+@needs_browser
+def test_the_replays_viewpoint_label_gives_way_to_the_robots_in_the_tab(recorded_search: Path, browser: Any,
+                                                                        tmp_path: Path) -> None:
+    from console.cli.replay_cmd import open_replay
+    from console.recording import recording_schemas as rs
+    from tests.console.views.test_object_labels import look
+
+    app = open_replay(recorded_search, port=0)
+    try:
+        rec = app.recording
+        last = max(t for t in rec.times(rs.SEARCH_STEP)
+                   if any(s.get("kind") == "viewpoint" for s in rec.state_at(t).search[-1:]))
+        app.seek_time(last)  # the replay at its last chosen viewpoint
+        view, labels = app.views["search"], app.views["objects"].labels
+        wait_for(lambda: view.drawn["viewpoints"] >= 1, "the replay's viewpoint", 60)
+        (spot,) = labels.spots("search")
+        assert spot.text.startswith(f"viewpoint {view.drawn['viewpoints']}: gain ")
+        assert spot.text not in [f.text for f in fixed_labels(app.server)]  # not one label for every tab
+        page, client = open_tab(browser, app, WIDTH, HEIGHT, ready="Play")
+        reports: list[Any] = []
+        client.camera.on_update(lambda cam: reports.append((tuple(float(v) for v in cam.position),
+                                                            np.asarray(cam.wxyz, dtype=np.float64))))
+        try:
+            canvas = page.evaluate(CANVAS_JS)
+            scale = client.camera.image_height / canvas["height"]
+            robot = next(f for f in fixed_labels(app.server) if f.text.startswith("robot"))
+            size = {"fov": float(client.camera.fov), "image_width": client.camera.image_width,
+                    "image_height": client.camera.image_height}
+
+            def robot_box(cam: Any) -> Any:
+                u, v, _ = project(cam.wxyz, cam.position, float(cam.fov), cam.image_width, cam.image_height,
+                                  robot.position)
+                return label_rect(robot.text, u, v, px_per_css(cam.image_height), robot.anchor, robot.font_scale)
+
+            def falls_on_robot(cam: Any) -> bool:
+                alone = choose([spot], cam)  # without the robot's label: where the viewpoint's would be drawn
+                return bool(alone) and overlaps(alone[0][1], robot_box(cam), gap=0.0)
+
+            # a view where the viewpoint's label would fall on the robot's (chosen on a camera like the tab's)
+            views = _views_through(np.asarray(robot.position, dtype=np.float64),
+                                   np.asarray(spot.position, dtype=np.float64))
+            on = next((v for v in views if falls_on_robot(look(*v, **size))), None)  # type: ignore[arg-type]
+            assert on is not None, ("no view where the viewpoint's label falls on the robot's", robot, spot)
+            _view(client, labels, reports, *on)
+            assert falls_on_robot(client.camera)  # as the page reports its view
+            wait_for(lambda: not labels.shown(client.client_id, layer="search")
+                     and not _overlapping(_boxes(app, client)),
+                     f"the tab to leave the viewpoint's label out ({_overlapping(_boxes(app, client))})", 60)
+            boxes = _boxes(app, client)
+            assert any(t == robot.text for t, _ in boxes) and spot.text not in [t for t, _ in boxes]
+            _draw_boxes(page, canvas, boxes, scale)
+            page.screenshot(path=str(tmp_path / "replay-viewpoint-label-on-robot.png"))
+
+            # a view where it is clear: the tab shows it, and nothing overlaps
+            fixed = fixed_labels(app.server)  # the side views first; kept beside every label that wins
+            clear = next((v for v in reversed(views) if choose([spot], look(*v, **size), reserved_spots=fixed)), None)
+            assert clear is not None
+            _view(client, labels, reports, *clear)
+            wait_for(lambda: [t for t, _ in labels.shown(client.client_id, layer="search")] == [spot.text]
+                     and not _overlapping(_boxes(app, client)),
+                     f"the tab to show the viewpoint's label ({labels.shown(client.client_id)}, "
+                     f"{_overlapping(_boxes(app, client))})", 60)
+            _draw_boxes(page, canvas, _boxes(app, client), scale)
+            page.screenshot(path=str(tmp_path / "replay-viewpoint-label-clear.png"))
+        finally:
+            page.close()
+    finally:
+        app.stop()
