@@ -128,10 +128,22 @@ class AgentDoor:
         self.robot_spec = robot_spec
         self.real_vehicle = bool(real_vehicle)
         self.queue = queue if queue is not None else ProposalQueue()
-        self.agent_goal: tuple[float, float, float] | None = None  # the candidate goal the agent planned
+        self._agent_goal: tuple[float, float, float] | None = None  # the candidate goal the agent planned
         self._events: deque[str] = deque(maxlen=EVENTS_KEPT)
         self._lock = threading.Lock()
         self._unsubscribe = [session.subscribe(self._on_session), self.queue.subscribe(self._on_proposal)]
+
+    @property
+    def agent_goal(self) -> tuple[float, float, float] | None:
+        """The goal of the candidate the agent planned (world [m]) or ``None``, followed when a merge of its object
+        planned it again beside the survivor (:meth:`~console.session.object_follow.ObjectFollow.followed_goal`)."""
+        goal = self._agent_goal
+        follow = getattr(self.session, "followed_goal", None)
+        return follow(goal) if goal is not None and follow is not None else goal
+
+    @agent_goal.setter
+    def agent_goal(self, goal: tuple[float, float, float] | None) -> None:
+        self._agent_goal = goal
 
     def close(self) -> None:
         for pid in [p.id for p in self.queue.pending()]:
@@ -362,8 +374,11 @@ class AgentDoor:
         except (ObjectGoalError, ObjectGone) as exc:
             raise AgentError(f"object: {exc}") from None
         how = {"walk": "walking", "fly": "flying over what is in the way"}.get(app.mode, app.mode)
-        out = self._plan(tuple(float(v) for v in app.goal), f"{obj.label.replace('_', ' ')} {obj.id} (beside it, by {how})"
+        goal = tuple(float(v) for v in app.goal)
+        out = self._plan(goal, f"{obj.label.replace('_', ' ')} {obj.id} (beside it, by {how})"
                          + (f"; {merged}" if merged else ""), why)
+        if hasattr(s, "link_goal"):  # like the console's Go to: the candidate follows a later merge of its object
+            s.link_goal(goal, obj.id)
         out["object"] = {"id": obj.id, "label": obj.label}
         if merged:
             out["merged"] = f"{merged}: planned beside {obj.id}"

@@ -32,7 +32,7 @@ def followed_object(session: Any, name: str) -> tuple[str, str]:
     """
     from planner.object_goal import ObjectGoalError, find_object
 
-    from console.session.session_types import SessionError
+    from console.session.object_follow import RemovedObject, UnknownObject
 
     try:
         find_object(session.scene, name)
@@ -44,9 +44,9 @@ def followed_object(session: Any, name: str) -> tuple[str, str]:
         return name, ""
     try:
         oid = resolve(name)
-    except SessionError as exc:
-        if str(exc).startswith("no object "):  # never in the map: goal_beside says what the map holds
-            return name, ""
+    except UnknownObject:  # never in the map: goal_beside says what the map holds
+        return name, ""
+    except RemovedObject as exc:
         text = str(exc)
         raise ObjectGone(text if text.startswith(f"{name} ") else f"{name} left the map: {text}") from None
     return oid, (f"{name} was merged into {oid} (one object mapped twice)" if oid != name else "")

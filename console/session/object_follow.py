@@ -13,7 +13,11 @@ capture that later captures should have seen and did not. The session remembers 
   fails or the object was removed; registered stops and a running mission's stops keep their point (already
   re-checked against the new map) and are told which object they now stand beside;
 - an id typed or picked after it left the map resolves to the object it was merged into
-  (:meth:`ObjectFollow.resolve_object`), or is refused saying it was removed and why.
+  (:meth:`ObjectFollow.resolve_object`), or is refused saying it was removed and why (:class:`RemovedObject`;
+  an id never in the map: :class:`UnknownObject`).
+
+A goal planned beside an object by another caller (the MCP agent's ``plan_to_object``) joins the same rule with
+:meth:`ObjectFollow.link_goal`; :meth:`ObjectFollow.followed_goal` tells it where its candidate went.
 
 No id of an object that left the map is kept as a goal or a selection. World frame [m].
 """
@@ -28,6 +32,14 @@ from planner.route import PlanResult, Route, path_points
 
 from console.session.session_core import SessionCore
 from console.session.session_types import Notice, SessionError, Vec3, fmt_point
+
+
+class UnknownObject(SessionError):
+    """No object of this id was ever in the map (as far as this session knows)."""
+
+
+class RemovedObject(SessionError):
+    """The object (or the one it was merged into) was removed from the map; the message says why."""
 
 
 def _near(a: Sequence[float], b: Sequence[float], tol: float) -> bool:
@@ -45,7 +57,8 @@ class ObjectFollow(SessionCore):
 
     def resolve_object(self, object_id: str) -> str:
         """The map object ``object_id`` is now: itself, or the object it was merged into (followed through
-        later merges). Raises :class:`SessionError` for an object removed from the map (saying why) or unknown."""
+        later merges). Raises :class:`RemovedObject` for an object removed from the map (saying why),
+        :class:`UnknownObject` for an id never in it (both are :class:`SessionError`)."""
         with self._lock:
             if any(o.id == object_id for o in self._scene.objects):
                 return object_id  # in the map (again, after an Undo of the merge)
@@ -57,14 +70,41 @@ class ObjectFollow(SessionCore):
             if any(o.id == oid for o in self._scene.objects):
                 return oid
             if oid in removed:
-                raise SessionError(f"{oid} was removed from the map: {removed[oid]}")
-            raise SessionError(f"no object {object_id!r} in the map")
+                raise RemovedObject(f"{oid} was removed from the map: {removed[oid]}")
+            raise UnknownObject(f"no object {object_id!r} in the map")
 
-    def go_to_object(self, object_id: str) -> tuple[PlanResult, Any, Any]:
+    def link_goal(self, goal: Sequence[float], object_id: str) -> None:
+        """Remember ``goal`` (world [m], the candidate's goal just planned beside ``object_id``) as that object's,
+        as :meth:`go_to_object` does: when map fusion later merges the object away, a candidate still at this
+        goal is planned again beside the surviving object (notice "Goal follows the merge"), and dropped when
+        the object is removed. :meth:`followed_goal` says where it went."""
+        g = tuple(float(v) for v in goal)
+        with self._lock:
+            self._fusion_log[2][g] = object_id  # type: ignore[index]
+            self._goal_moves.pop(g, None)  # planned here afresh: where an older candidate here went is history
+
+    @property
+    def _goal_moves(self) -> dict[Vec3, Vec3]:
+        """Candidate goal -> the goal it was planned again to after its object was merged away."""
+        return self.__dict__.setdefault("_goal_moves", {})
+
+    def followed_goal(self, goal: Sequence[float]) -> Vec3:
+        """Where a candidate planned to ``goal`` (world [m]) is now: ``goal`` itself, or the goal it was planned
+        again to beside the surviving object after its object was merged away (followed through later merges)."""
+        g: Vec3 = tuple(float(v) for v in goal)  # type: ignore[assignment]
+        with self._lock:
+            moves, seen = self._goal_moves, set()
+            while g in moves and g not in seen:
+                seen.add(g)
+                g = moves[g]
+        return g
+
+    def go_to_object(self, object_id: str, _moved_from: Vec3 | None = None) -> tuple[PlanResult, Any, Any]:
         """Plan a candidate to the free floor beside ``object_id`` (an id, followed through merges, or a label:
         the nearest such object); the goal is remembered as this object's, so it follows a later merge.
         Returns ``(result, object, approach)`` (:func:`planner.object_goal.goal_beside`); raises
-        :class:`SessionError` when the object is gone or cannot be reached."""
+        :class:`SessionError` when the object is gone or cannot be reached. ``_moved_from`` (internal): the
+        goal of the candidate this one replaces after a merge (:meth:`followed_goal`)."""
         with self._lock:
             merged, removed, _ = self._fusion_log
             left = object_id in merged or object_id in removed
@@ -77,10 +117,17 @@ class ObjectFollow(SessionCore):
         except ObjectGoalError as exc:
             raise SessionError(str(exc)) from None
         goal = tuple(float(v) for v in app.goal)
+        moved = _moved_from is not None and _moved_from != goal
+        with self._lock:
+            if moved:  # known before the route event, so that listeners read where the candidate went
+                self._goal_moves[_moved_from] = goal  # type: ignore[index]
         res = self.add_goal(goal)  # type: ignore[attr-defined]  # Session
-        if res.ok:
-            with self._lock:
+        with self._lock:
+            if res.ok:
                 self._fusion_log[2][goal] = obj.id  # type: ignore[index]
+                self._goal_moves.pop(goal, None)  # type: ignore[arg-type]
+            elif moved:
+                self._goal_moves.pop(_moved_from, None)  # type: ignore[arg-type]
         return res, obj, app
 
     def _follow_fusion_locked(self, merged: Sequence[tuple[str, str]], removed: Sequence[tuple[str, str]],
@@ -149,8 +196,10 @@ class ObjectFollow(SessionCore):
     def _replan_followed(self, object_id: str) -> None:
         """Plan the candidate again beside ``object_id`` (its goal's object was merged into it); dropped with
         a notice when that fails."""
+        with self._lock:
+            cand = self._route.candidate_goal
         try:
-            res, _, _ = self.go_to_object(object_id)
+            res, _, _ = self.go_to_object(object_id, tuple(float(v) for v in cand) if cand is not None else None)
             why = None if res.ok else res.message
         except SessionError as exc:
             why = str(exc)
@@ -160,4 +209,4 @@ class ObjectFollow(SessionCore):
                         "warning")  # type: ignore[attr-defined]
 
 
-__all__ = ["ObjectFollow"]
+__all__ = ["ObjectFollow", "RemovedObject", "UnknownObject"]

@@ -26,9 +26,9 @@ from planner.search_viewpoints import Viewpoint
 from pipeline.scene import Scene
 
 from console.session.go_look import looked_from
+from console.session.object_follow import RemovedObject, UnknownObject
 from console.session.search_choose import choose_viewpoint
 from console.session.search_moves import BATTERY, PAUSED, STOPPED
-from console.session.session_types import SessionError
 
 SAME = 0.3
 """Starts and goals closer than this [m] make the same route."""
@@ -184,8 +184,10 @@ class SearchFinish:
             return (now if now is not None else obj), None
         try:
             oid = resolve(obj.id)
-        except SessionError as exc:
+        except RemovedObject as exc:
             return obj, f"found, not reached: {exc}"
+        except UnknownObject:  # deleted by hand, or its capture undone: neither merged nor removed by fusion
+            return obj, f"found, not reached: {obj.id} is no longer in the map"
         kept = next((o for o in s.scene.objects if o.id == oid), None)
         if kept is None:  # the map changed again meanwhile: the next pass resolves it
             return obj, None

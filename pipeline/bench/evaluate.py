@@ -101,12 +101,21 @@ def _field(data: dict[str, Any], key: str, where: str) -> Any:
 
 
 def _read_json(path: Path) -> Any:
+    """The JSON in ``path``; :class:`BenchError` naming the file (and the line and column of a syntax error)."""
+    from pipeline.file_kind import os_error_words
+
     try:
-        return json.loads(path.read_text(encoding="utf-8"))
+        return json.loads(path.read_text(encoding="utf-8-sig"))
     except FileNotFoundError:
         raise BenchError(f"{path}: no such file") from None
-    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
-        raise BenchError(f"{path}: cannot read JSON: {exc}") from None
+    except OSError as exc:
+        raise BenchError(f"{path}: cannot read it: {os_error_words(exc, path)}") from None
+    except UnicodeDecodeError:
+        raise BenchError(f"{path}: is not text (not UTF-8): expected JSON") from None
+    except json.JSONDecodeError as exc:
+        raise BenchError(f"{path}: not valid JSON (line {exc.lineno}, column {exc.colno}): {exc.msg}") from None
+    except RecursionError:
+        raise BenchError(f"{path}: not usable JSON: nested too deeply") from None
 
 
 def _box4(v: Any, where: str) -> tuple[float, float, float, float]:

@@ -86,3 +86,45 @@ def test_ids_and_labels_in_the_map_and_unknown_names_answer_as_before(door: Agen
     with pytest.raises(AgentError, match=r"^object: no object with id or label 'nothing-9' in the scene \(labels: "
                                          r"office_chair\)"):
         door.call("plan_to_object", {"object": "nothing-9"}, allow_actions=True)
+
+
+def test_the_agents_candidate_follows_a_later_merge_of_its_object_and_stays_the_agents(door: AgentDoor) -> None:
+    """plan_to_object, then a capture whose fusion merges that object away: the candidate is planned again beside
+    the surviving object (as the console's Go to is), the notice names both, and the path is still the agent's."""
+    s, c = door.session, merge_case
+    _spawn(s, c._capture("a", (1.2, -1.5, 0.35), c._chair("office_chair-1", (1.2, 2.55, 0.525), "a", (250, 60, 420, 360))))
+    _spawn(s, c._capture("b", (1.8, -1.7, 0.35), c._chair("office_chair-1", (1.8, 2.3, 0.525), "b", (200, 60, 370, 360))))
+    out = door.call("plan_to_object", {"object": "office_chair-2", "why": "the chair by the desk"}, allow_actions=True)
+    assert out["object"]["id"] == "office_chair-2" and "merged" not in out, out
+    before = s.route_snapshot().candidate_goal
+    assert before is not None and door.call("mission_state")["route"]["candidate_by_agent"] is True
+    notices: list[str] = []
+    s.subscribe(lambda topic, p: notices.append(f"{p.title}: {p.body}") if topic == NOTICE else None)
+    _spawn(s, c._capture("c", (1.5, 1.2, 0.35), c._chair("office_chair-1", (1.45, 2.35, 0.525), "c", (250, 60, 420, 360))))
+    assert [o.id for o in s.scene.objects] == ["office_chair-1"]
+    assert ("Goal follows the merge: office_chair-2 was merged into office_chair-1: the candidate is planned again "
+            "beside office_chair-1") in notices, notices
+    after = s.route_snapshot().candidate_goal
+    assert after is not None and after != before, (before, after)  # planned again, not only kept
+    assert door.agent_goal == after
+    state = door.call("mission_state")
+    assert state["route"]["candidate_by_agent"] is True, state["route"]
+    res, obj, _ = s.go_to_object("office_chair-1")  # what the console's own Go to plans beside the survivor
+    assert res.ok and obj.id == "office_chair-1" and s.route_snapshot().candidate_goal == after
+
+
+def test_the_agents_candidate_is_dropped_when_a_later_capture_removes_its_object(door: AgentDoor) -> None:
+    s, c = door.session, miss_case
+    _spawn(s, c._the_bad_capture())
+    out = door.call("plan_to_object", {"object": "office_chair-2"}, allow_actions=True)
+    assert out["object"]["id"] == "office_chair-2" and s.route_snapshot().candidate_goal is not None
+    notices: list[str] = []
+    s.subscribe(lambda topic, p: notices.append(f"{p.title}: {p.body}") if topic == NOTICE else None)
+    _spawn(s, c._capture("look", (2.0, 1.0, 0.35), math.pi / 2,
+                         c._obj("office_chair-1", "office_chair", (1.35, 2.45, 0.525), c.CHAIR, "look",
+                                (40, 60, 260, 380))))
+    assert [o.id for o in s.scene.objects] == ["office_chair-1"]
+    assert s.route_snapshot().candidate_goal is None
+    assert any(n.startswith("Goal dropped: the candidate went beside office_chair-2, which left the map (seen by one "
+                            "capture only") for n in notices), notices
+    assert door.call("mission_state")["route"]["candidate_by_agent"] is False
