@@ -128,3 +128,27 @@ def test_the_agents_candidate_is_dropped_when_a_later_capture_removes_its_object
     assert any(n.startswith("Goal dropped: the candidate went beside office_chair-2, which left the map (seen by one "
                             "capture only") for n in notices), notices
     assert door.call("mission_state")["route"]["candidate_by_agent"] is False
+
+
+def test_the_agent_panel_labels_the_candidate_planned_again_after_the_merge(door: AgentDoor) -> None:
+    """The Agent panel redraws its label on the route event of the new candidate: it already reads the new goal."""
+    import viser
+
+    from console.views.approval_view import ApprovalView
+
+    s, c = door.session, merge_case
+    _spawn(s, c._capture("a", (1.2, -1.5, 0.35), c._chair("office_chair-1", (1.2, 2.55, 0.525), "a", (250, 60, 420, 360))))
+    _spawn(s, c._capture("b", (1.8, -1.7, 0.35), c._chair("office_chair-1", (1.8, 2.3, 0.525), "b", (200, 60, 370, 360))))
+    server = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
+    view = ApprovalView(server, s, door)
+    try:
+        door.call("plan_to_object", {"object": "office_chair-2"}, allow_actions=True)
+        assert view.labelled
+        _spawn(s, c._capture("c", (1.5, 1.2, 0.35), c._chair("office_chair-1", (1.45, 2.35, 0.525), "c",
+                                                             (250, 60, 420, 360))))
+        after = s.route_snapshot().candidate_goal
+        assert after is not None and door.agent_goal == after
+        assert view.labelled and view.label_spots[0].position[:2] == pytest.approx(after[:2])
+    finally:
+        view.close()
+        server.stop()
