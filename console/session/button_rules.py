@@ -98,15 +98,26 @@ class ReturnTarget:
     why: str
 
 
+_last_target: tuple[Any, tuple[float, float, float], ReturnTarget] | None = None
+"""The last :func:`return_target` answer with its grid and take-off spot: the robot panel asks on every robot
+report, and a :class:`~planner.grid.PlanningGrid` (frozen) changes only by being replaced."""
+
+
 def return_target(grid: PlanningGrid | None, launch: Sequence[float]) -> ReturnTarget:
     """Where Return lands from take-off spot ``launch`` (world [m]): the first of
     :func:`planner.landing_spot.return_spots`, the spots the session's Return plans to in order (a later
     one only when the planner cannot reach the first). No grid: the take-off spot."""
+    global _last_target
     home = (float(launch[0]), float(launch[1]), float(launch[2]) if len(launch) > 2 else 0.0)
     if grid is None:
         return ReturnTarget(home, "")
+    last = _last_target
+    if last is not None and last[0] is grid and last[1] == home:
+        return last[2]
     spots, why = return_spots(grid, home)
-    return ReturnTarget(spots[0] if spots else None, why)
+    target = ReturnTarget(spots[0] if spots else None, why)
+    _last_target = (grid, home, target)
+    return target
 
 
 def no_return_spot(launch: Sequence[float], why: str) -> str:
