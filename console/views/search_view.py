@@ -25,7 +25,7 @@ from console.session.search_report import result_line
 from console.session.search_types import BATTERY_RESERVE, MAX_CAPTURES, MAX_TIME, MIN_TIME
 from console.session.session import JOB, RUN, SEARCH, Session, SessionError
 from console.views.client_notice import tell
-from console.views.object_labels import LabelSpot, board_for
+from console.views.object_labels import LabelSpot, show_in_layer
 from console.views.refresher import Refresher
 
 
@@ -78,7 +78,7 @@ class SearchView:
         self.resume.on_click(lambda e: self._act(e, job.resume))
         self.stop.on_click(lambda e: self._act(e, job.stop))
         self._marker: Any = None
-        self._label: Any = None
+        self._fallback: list[Any] = []  # the label's server-wide handles, only without a declutter
         self._drawn: Any = None
         self._refresher = Refresher(self._refresh, "search-view")
         session.subscribe(self._on_event)
@@ -134,13 +134,13 @@ class SearchView:
         vp = job.chosen if running else None
         if vp is not self._drawn:
             self._drawn = vp
-            for h in (self._marker, self._label):
+            for h in [self._marker, *self._fallback]:
                 if h is not None:
                     try:
                         h.remove()
                     except Exception:
                         pass
-            self._marker = self._label = None
+            self._marker, self._fallback = None, []
             if vp is not None:
                 e = np.asarray(vp.eye, dtype=np.float32)
                 tip = e + 0.6 * np.array([np.cos(vp.yaw), np.sin(vp.yaw), 0.0], dtype=np.float32)
@@ -150,12 +150,8 @@ class SearchView:
             self._show_label(vp)
 
     def _show_label(self, vp: Any) -> None:
-        """The viewpoint's label (``None``: none), in every tab's declutter (server-wide only without one)."""
+        """The viewpoint's label (``None``: none), in every tab's declutter (server-wide only without one:
+        :func:`~console.views.object_labels.show_in_layer`)."""
         spots = [] if vp is None else [LabelSpot(f"next viewpoint: gain {vp.gain:.1f} m³, cost {vp.cost:.1f}",
                                                  tuple(float(v) for v in vp.eye), (), "top-left")]
-        board = board_for(self._server)
-        if board is not None:
-            board.set_layer("search", spots)
-        elif spots:
-            self._label = self._server.scene.add_label("/search/viewpoint_why", spots[0].text,
-                                                       position=spots[0].position, anchor="top-left")
+        self._fallback = show_in_layer(self._server, "search", spots, "/search/viewpoint_why")

@@ -105,3 +105,28 @@ def test_the_viewpoint_label_is_per_tab_and_never_over_the_robots(console) -> No
     board.refresh(tab.client_id)
     assert board.spots("search") == [] and text not in tab.shown()
     assert np.isfinite(cam.fov)
+
+
+def test_without_a_declutter_the_label_is_one_server_wide_node_replaced_and_removed(tmp_path: Path) -> None:
+    """A server with no objects view (no declutter): the label is a server-wide node, one at a time."""
+    server = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
+    job = _Job()
+    view = SearchView(server, Session(tmp_path / "s", autosave=False), job, target_height)  # type: ignore[arg-type]
+
+    def shown() -> list[tuple[str, tuple[float, ...]]]:
+        return [(f.text, tuple(round(float(v), 3) for v in f.position)) for f in fixed_labels(server)
+                if f.text.startswith("next viewpoint")]
+
+    try:
+        job.chosen = _viewpoint((1.0, 2.0, 0.6))
+        view.refresh()
+        assert shown() == [("next viewpoint: gain 3.1 m³, cost 4.2", (1.0, 2.0, 0.6))]
+        job.chosen = _viewpoint((4.0, 5.0, 1.2))  # the next viewpoint replaces it
+        view.refresh()
+        assert shown() == [("next viewpoint: gain 3.1 m³, cost 4.2", (4.0, 5.0, 1.2))]
+        job.running = False  # the search ends: the label goes
+        view.refresh()
+        assert shown() == []
+    finally:
+        view._refresher.close()
+        server.stop()
