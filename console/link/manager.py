@@ -357,7 +357,7 @@ class MissionManager(SafetyMixin):
                  fresh: bool = True) -> list[tuple[MissionSegment, bool]] | None:
         """The segment's parts from where the robot is now (:func:`~console.link.manager_resume.segment_parts`)."""
         floor = float(self._mission.bounds_min[2]) if self._mission else 0.0
-        return segment_parts(seg, self._state(), floor, next_wp, fresh, self.resume_tolerance)
+        return segment_parts(seg, self._state_now(), floor, next_wp, fresh, self.resume_tolerance)
 
     def _state(self) -> RobotState:
         st = self.link.latest_state()

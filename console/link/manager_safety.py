@@ -127,6 +127,14 @@ class SafetyMixin:
             return self.link.latest_state()
         return fresh(time.monotonic(), timeout)
 
+    def _state_now(self) -> RobotState:
+        """The robot's state as the link knows it now (its ``state_now``): where the previous segment
+        really ended, not a stored sample that a loaded machine's sampler may have taken before; else the
+        latest sample."""
+        now = getattr(self.link, "state_now", None)
+        st = now() if now is not None else None
+        return st if st is not None else self._state()
+
     def _vehicle_control(self) -> str:
         """Live: ``""`` while the console may command the robot, else ``vehicle took control: ...``."""
         return str(self.link.vehicle_control or "")

@@ -235,6 +235,11 @@ class MavlinkLink(RobotLink):
         pose = self.telemetry.pose_age()
         return max(hb, pose) if math.isfinite(pose) else hb
 
+    def state_now(self) -> RobotState | None:
+        """A state built from the telemetry as it is now (``None`` before the vehicle is heard): the
+        stored sample is up to a sampler period old, more on a loaded machine."""
+        return self._make_state()
+
     def fresh_state(self, since: float, timeout: float) -> RobotState | None:
         """A state built only from telemetry received after ``since`` (monotonic [s]): a heartbeat, a
         valid position and (if the vehicle sends it) EXTENDED_SYS_STATE; ``None`` if that does not come
