@@ -150,7 +150,7 @@ def return_hint(launch: Vec3 | None, grid: PlanningGrid | None = None,
         end: Where a Return already planned ends (its mission's last point, world [m]); ``None``: where
             :func:`return_target` says it will land.
 
-    Example: ``Return: lands at (0.38, 0.62), 0.18 m from the take-off spot (0.20, 0.70), where the robot
+    Example: ``Return: lands at (0.38, 0.62), 0.19 m from the take-off spot (0.20, 0.70), where the robot
     cannot land: too near the wall``.
     """
     if launch is None:
