@@ -7,7 +7,9 @@ faster than the wall clock (``time_scale``). It rehearses like a real robot: a s
 refused up front because of a hidden object; the robot moves until its body would touch one
 (:mod:`~console.link.sim_contact`), or a wall or the ceiling of its ``room``, and stops there,
 failing the segment with "contact with an unmapped obstacle ahead at (x, y, z)" (never the object's
-name, class or extent). It never leaves
+name, class or extent); a landing that meets an object's top face touches down on it (or stops there,
+"contact below", when the face is too small to stand on). Its battery failsafes (critical: land;
+empty: come down and disarm) are in :mod:`~console.link.sim_battery`. It never leaves
 the workspace (the safety net; checked up front). Its camera renders the hidden world from
 the robot's camera pose (RGB + ground-truth depth and instance masks), or serves real photos from
 a ``--captures`` folder.
@@ -39,10 +41,11 @@ from planner.mission import MissionSegment
 
 from console.link.base import CaptureResult, LinkError, Mode, RobotLink, RobotState, RunStatus, SegmentRun
 from console.link.captures import CapturesFolder
+from console.link.sim_battery import SimBattery
 from console.link.render import SceneRenderer
 from console.link.sim_camera import folder_capture, render_capture
 from console.link.sim_config import DEFAULT_INTRINSICS, DEFAULT_MOUNT, SimConfig
-from console.link.sim_contact import BodyContact, contact_text
+from console.link.sim_contact import BodyContact, contact_below_text, contact_text
 from console.link.sim_motion import Phase, path_length, plan_segment, verb, wrap_angle
 from console.link.world import DEFAULT_START, ROOM_MAX, ROOM_MIN, paper_room
 
@@ -52,7 +55,7 @@ MESSAGES_KEPT = 5  # status messages carried by each state sample
 _STEP = 0.05  # [m] longest straight move checked against the occupancy at once
 
 
-class SimRobot(RobotLink):
+class SimRobot(SimBattery, RobotLink):
     """A simulated aerial-ground robot in a hidden world.
 
     Args:
@@ -236,37 +239,13 @@ class SimRobot(RobotLink):
                 self._self_landing = True  # once per outage (a blocked descent is not retried)
                 log.info("simulated robot: link lost for %.1f s, landing by itself", outage)
                 self._say("CRITICAL", f"link lost for {outage:.0f} s: landing by itself")
-                self._phases = [Phase("descend", Mode.LANDING, target=(float(self._pos[0]), float(self._pos[1]),
-                                                                        self._floor), speed=self.config.descent_rate),
-                                Phase("settle", Mode.LANDING, duration=self.config.settle_time)]
+                self._phases = self._landing_phases(Mode.LANDING)
             self._vel = (self._pos - before) / dt if dt > 0 else np.zeros(3)
             mode = self._mode()
             drain = (self.config.drain_fly if not self._landed or mode is Mode.TAKING_OFF
                      else self.config.drain_walk if mode is Mode.WALKING else self.config.drain_idle)
             self._battery = max(0.0, self._battery - drain * dt)
             self._battery_failsafe()
-
-    def _battery_failsafe(self) -> None:
-        """The on-board battery failsafe: at critical charge in the air, land where it is (once per flight)."""
-        if self._landed:
-            self._battery_landing = False
-            return
-        if self._battery_landing or self._battery > self.config.battery_critical:
-            return
-        self._battery_landing = True
-        log.info("simulated robot: battery %.0f %%, landing by itself", 100 * self._battery)
-        self._say("CRITICAL", "battery critical: landing")
-        self._finish(RunStatus.FAILED, f"battery critical ({100 * self._battery:.0f} %): landing", say=False)
-        self._phases = [Phase("descend", Mode.FAILSAFE, target=(float(self._pos[0]), float(self._pos[1]),
-                                                                   self._floor), speed=self.config.descent_rate),
-                        Phase("settle", Mode.LANDING, duration=self.config.settle_time)]
-
-    def set_battery(self, fraction: float) -> None:
-        """Set the charge (for tests and demos) [0..1]; the failsafe acts on the next step."""
-        if not (isinstance(fraction, (int, float)) and math.isfinite(fraction) and 0.0 <= fraction <= 1.0):
-            raise ValueError(f"battery: must be a number within 0..1, got {fraction!r}")
-        with self._lock:
-            self._battery = float(fraction)
 
     def _mode(self) -> Mode:
         if self._phases:
@@ -334,6 +313,8 @@ class SimRobot(RobotLink):
             self._yaw = wrap_angle(self._yaw + math.copysign(self.config.yaw_rate * dt, err))
             return 0.0
         # straight motion: move, climb, descend
+        if ph.kind == "descend":
+            self._meet_top(ph)
         assert ph.target is not None
         target = np.asarray(ph.target, dtype=np.float64)
         delta = target - self._pos
@@ -347,7 +328,7 @@ class SimRobot(RobotLink):
                 # the last point of a step that reaches the target is the target itself: rounding put a
                 # landing 1e-17 m under the floor, outside the workspace (seen on a loaded machine)
                 p = target.copy() if reaches and i == n else origin + delta * (step * i / n / dist)
-                if p[2] > self._floor + 1e-6:
+                if p[2] > self._pos[2] + 1e-6:  # rising: off the floor or the top it stood on
                     self._landed = False
                 why = self._blocker(p)
                 touch = self._contact.blocked(self._pos, p) if why is None else None
@@ -364,12 +345,28 @@ class SimRobot(RobotLink):
             return dt - (dist / ph.speed if ph.speed > 0 else 0.0)
         return 0.0
 
+    def _meet_top(self, ph: Phase) -> None:
+        """A descent that meets an object's top face under the body ends on it: a touchdown when the
+        body can stand on it (or the empty battery's forced descent), else a stop there with the reason."""
+        assert ph.target is not None
+        td = self._contact.top_below(self._pos, ph.target[2])
+        if td is None:
+            return
+        ph.target = (ph.target[0], ph.target[1], td.height)
+        if td.why and ph.forced:
+            self._say("WARNING", f"came down on a surface it cannot stand on: {td.why}")
+        elif td.why:
+            ph.stop = contact_below_text(td.point, td.why)
+
     def _end_phase(self, ph: Phase) -> None:
         self._phases.pop(0)
         if ph.kind == "spool":
             self._armed = True
-        elif ph.kind == "descend" and self._pos[2] <= self._floor + 1e-6:
-            self._landed = True
+        elif ph.kind == "descend" and ph.stop:
+            self._fail(f"{verb(ph)} stopped: {ph.stop}")
+            return
+        elif ph.kind == "descend":
+            self._landed = True  # on the floor or on a top face it stands on
         elif ph.kind == "settle":
             self._armed = False
         if self._run is not None:
@@ -389,6 +386,8 @@ class SimRobot(RobotLink):
         self._phases = []
 
     def _fail(self, error: str) -> None:
+        if self._run is None and self._phases:
+            self._say("ERROR", error)  # the robot's own manoeuvre (a failsafe landing): said, not lost
         self._finish(RunStatus.FAILED, error)
 
     # --- commands --------------------------------------------------------------------------------
@@ -401,6 +400,8 @@ class SimRobot(RobotLink):
             self._refuse_while_running()
             run = SegmentRun(segment)
             try:
+                if (empty := self._battery_refusal()) is not None:
+                    raise LinkError(empty)
                 phases = plan_segment(segment, self._pos, self._yaw, self._landed, self._floor, self.config,
                                       self._blocker)
             except LinkError as exc:
@@ -443,6 +444,11 @@ class SimRobot(RobotLink):
         self._stream.publish(state)
 
     def _stop_motion(self, status: RunStatus, why: str, say: bool = True) -> None:
+        if self._phases and self._phases[0].forced:  # the empty battery's descent: nothing stops it
+            keep = self._phases
+            self._finish(status, why, say)
+            self._phases = keep
+            return
         if self._phases and self._phases[0].kind == "spool":
             self._armed = False  # never lifted off
         if self._landed and self._phases and self._phases[0].kind == "settle":

@@ -11,6 +11,12 @@ top) is felt the same way: the body touches a wall when the wall comes within ``
 origin in plan, the ceiling when the body's top (origin + ``height``) reaches it; leaving the room
 is touching its wall. The floor is no contact (the robot stands on it).
 
+A vertical descent that meets an object's **top face** under the body is no obstacle "ahead": the
+robot touches down on it (:meth:`BodyContact.top_below`), as a landing gear does, when the face holds
+the body's centre and is at least the body's width (``2 * radius``) on its shorter side; otherwise
+it stops on the face's height and says why ("contact below at (x, y, z): too small to stand on").
+The world's boxes are upright (yaw only), so their top faces are level: none is too steep.
+
 A motion stops where the body would touch an object or a wall it is not already touching, or would
 come closer to one it touches (so a robot that starts against one can still move away). The
 contact is reported as a point on the surface: the robot "feels" it, as a bumper would; the
@@ -23,6 +29,7 @@ Frames: world (z up) [m]; yaw about +z [rad].
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 from typing import Sequence
 
 import numpy as np
@@ -30,6 +37,21 @@ import numpy as np
 from pipeline.scene import SceneObject
 
 Vec3 = tuple[float, float, float]
+
+
+@dataclass(frozen=True)
+class Touchdown:
+    """Where a vertical descent meets the first top face under the body (world frame [m]).
+
+    Attributes:
+        height: The face's height (world z) [m]: the body's origin rests there.
+        point: The contact point on the face (under the body's centre, or the face's nearest point).
+        why: Why the body cannot stand on the face (``too small to stand on ...``), ``""`` when it can.
+    """
+
+    height: float
+    point: Vec3
+    why: str
 
 
 class BodyContact:
@@ -89,6 +111,32 @@ class BodyContact:
         """Whether the body at ``p`` (world frame [m]) touches any object (walls: :meth:`touches_wall`)."""
         return bool(self._touching(p)[0].any()) if len(self._centre) else False
 
+    def top_below(self, p: Sequence[float], z_to: float) -> Touchdown | None:
+        """The first top face that the body met by descending straight down from ``p`` to height ``z_to``
+        (world frame [m]): the highest face under the body's footprint between the body's bottom at ``p``
+        and ``z_to``, or ``None`` (nothing under it: it reaches ``z_to``).
+
+        The body stands on it when the face holds the body's centre (plan distance 0) and is at least
+        ``2 * radius`` [m] on its shorter side (the landing gear's width); else :attr:`Touchdown.why` says
+        why not."""
+        if not len(self._centre):
+            return None
+        dist, near = self._plan_distance(p)
+        z = float(p[2])
+        under = (dist < self.radius - 1e-9) & (self._zhi <= z + 1e-9) & (self._zhi > float(z_to) + 1e-9)
+        if not under.any():
+            return None
+        i = int(np.flatnonzero(under)[np.argmax(self._zhi[under])])
+        top = float(self._zhi[i])
+        point = (float(near[i, 0]), float(near[i, 1]), top)
+        short = 2 * float(min(self._half[i]))
+        why = ""
+        if dist[i] > 1e-9:
+            why = "the robot's centre is beyond the edge of the surface under it"
+        elif short < 2 * self.radius - 1e-9:
+            why = f"the surface under the robot is too small to stand on ({short:.2f} m wide)"
+        return Touchdown(top, point, why)
+
     def _wall_gaps(self, p: Sequence[float]) -> np.ndarray:
         """Free space [m] between the body at ``p`` and each wall (x min, x max, y min, y max) and the
         ceiling; negative: the body crosses it."""
@@ -147,4 +195,10 @@ def contact_text(point: Vec3) -> str:
     return f"contact with an unmapped obstacle ahead at ({point[0]:.2f}, {point[1]:.2f}, {point[2]:.2f})"
 
 
-__all__ = ["BodyContact", "contact_text"]
+def contact_below_text(point: Vec3, why: str) -> str:
+    """The operator's words for a descent stopped on a face it cannot stand on: ``contact below at
+    (x, y, z): <why>`` [m] (no object named)."""
+    return f"contact below at ({point[0]:.2f}, {point[1]:.2f}, {point[2]:.2f}): {why}"
+
+
+__all__ = ["BodyContact", "Touchdown", "contact_below_text", "contact_text"]

@@ -37,6 +37,10 @@ class Phase:
         speed: Straight-motion speed [m/s].
         duration: Time left of a ``spool`` or ``settle`` [s].
         waypoint: Index of the segment's waypoint the step heads for (progress reports).
+        stop: A ``descend`` that ends on a face the body cannot stand on: why it stops there
+            (``contact below at ...``), ``""`` when it touches down.
+        forced: Part of the empty battery's descent: it lands on whatever it meets and Hold / Abort
+            do not stop it.
     """
 
     kind: str
@@ -46,6 +50,8 @@ class Phase:
     speed: float = 0.0
     duration: float = 0.0
     waypoint: int | None = None
+    stop: str = ""
+    forced: bool = False
 
 
 def wrap_angle(a: float) -> float:
@@ -56,7 +62,7 @@ def wrap_angle(a: float) -> float:
 def verb(ph: Phase) -> str:
     """What a phase's motion is called in messages (``walking``, ``flight`` ...)."""
     return {Mode.WALKING: "walking", Mode.FLYING: "flight", Mode.TAKING_OFF: "take-off",
-            Mode.LANDING: "landing"}.get(ph.mode, "motion")
+            Mode.LANDING: "landing", Mode.FAILSAFE: "failsafe landing"}.get(ph.mode, "motion")
 
 
 def path_length(start: np.ndarray, phases: Sequence[Phase]) -> float:
