@@ -12,7 +12,8 @@ raising :class:`AgentError` with a message naming the bad field, the same words 
 the CLI. The MCP server (:mod:`console.mcp.server`) calls it in-process or through the console's
 loopback control API (:mod:`console.mcp.control_api`). Every call, proposal and decision is
 announced on the session (topic ``agent``), so the recorder writes it to the session's MCAP
-(``/agent/events`` and ``/log``) and replay shows it.
+(``/agent/events`` and ``/log``) and replay shows it. The proposal requests are
+:class:`~console.mcp.door_proposals.ProposalOps` (mixed in); the argument checks :mod:`console.mcp.door_args`.
 
 Safety rules, enforced here whatever the client says:
 - proposals only when the door was opened with ``allow_actions``, and never on a real
@@ -36,16 +37,15 @@ from collections import deque
 from typing import Any, Mapping
 
 from console.mcp import state_read as read
+from console.mcp.door_args import WHY_MAX, AgentError
+from console.mcp.door_args import number_arg as _number
+from console.mcp.door_args import text_arg as _text
+from console.mcp.door_proposals import ProposalOps
 from console.mcp.proposals import Proposal, ProposalError, ProposalQueue
 from console.session.session_types import SessionError
-from console.wording import plural
 
 log = logging.getLogger(__name__)
 
-WHY_MAX = 2000
-"""Longest reason an agent may give [characters]."""
-NAME_MAX = 200
-"""Longest object name [characters]."""
 WAIT_MAX = 30.0
 """Longest single wait for a decision [s] (the MCP server waits again until decided)."""
 EVENTS_KEPT = 300
@@ -56,33 +56,6 @@ SAFE_OPS = ("hold", "land_here", "return_to_launch")
 PROPOSAL_OPS = ("plan_to_point", "plan_to_object", "propose_capture_and_map", "propose_look_around", "propose_search",
                 "propose_mission",
                 "withdraw_proposal")
-
-
-class AgentError(ValueError):
-    """A request refused; the message says why (naming the bad field)."""
-
-
-def _text(args: Mapping[str, Any], name: str, limit: int, required: bool = False) -> str:
-    v = args.get(name, "")
-    if v is None:
-        v = ""
-    if not isinstance(v, str):
-        raise AgentError(f"{name}: must be text, got {type(v).__name__}")
-    v = v.strip()
-    if required and not v:
-        raise AgentError(f"{name}: must not be empty: say why, for the operator")
-    if len(v) > limit:
-        raise AgentError(f"{name}: at most {limit} characters, got {len(v)}")
-    return v
-
-
-def _number(args: Mapping[str, Any], name: str, default: float | None = None) -> float:
-    v = args.get(name, default)
-    if isinstance(v, bool) or not isinstance(v, (int, float)):
-        raise AgentError(f"{name}: must be a number, got {v!r}")
-    if not math.isfinite(float(v)):
-        raise AgentError(f"{name}: must be finite, got {v!r}")
-    return float(v)
 
 
 def link_is_real(robot_spec: str) -> bool:
@@ -100,7 +73,7 @@ def link_is_real(robot_spec: str) -> bool:
     return True  # a serial device (/dev/ttyACM0, COM3) or anything unknown: a real vehicle
 
 
-class AgentDoor:
+class AgentDoor(ProposalOps):
     """Serves an agent's requests on a running console (see the module docstring).
 
     Args:
@@ -346,146 +319,6 @@ class AgentDoor:
         if self.commands is None:
             raise AgentError("this console has no vehicle commands (no robot link)")
         return str(self.commands.run(name))
-
-    # --- proposals (with --allow-actions) --------------------------------------------------------------------
-    def _op_plan_to_point(self, args: Mapping[str, Any]) -> dict[str, Any]:
-        from console.views.picking import typed_goal
-
-        why = _text(args, "why", WHY_MAX)
-        goal = typed_goal([args.get("x"), args.get("y"), args.get("z", self.session.workspace.floor)],
-                          self.session.workspace)
-        return self._plan(goal, f"point ({goal[0]:.2f}, {goal[1]:.2f}, {goal[2]:.2f})", why)
-
-    def _op_plan_to_object(self, args: Mapping[str, Any]) -> dict[str, Any]:
-        from planner.object_goal import ObjectGoalError, goal_beside
-        from planner.route import Route
-
-        from console.mcp.object_names import ObjectGone, followed_object
-
-        name = _text(args, "object", NAME_MAX, required=True)
-        why = _text(args, "why", WHY_MAX)
-        s = self.session
-        snap = s.route_snapshot()
-        start = tuple(snap.registered[-1][-1]) if snap.registered else snap.start
-        grid = s.grid
-        try:
-            oid, merged = followed_object(s, name)  # an id merged away: the object it was merged into
-            obj, app = goal_beside(s.scene, grid, oid, start, Route(grid, start, s.weights))
-        except (ObjectGoalError, ObjectGone) as exc:
-            raise AgentError(f"object: {exc}") from None
-        how = {"walk": "walking", "fly": "flying over what is in the way"}.get(app.mode, app.mode)
-        goal = tuple(float(v) for v in app.goal)
-        out = self._plan(goal, f"{obj.label.replace('_', ' ')} {obj.id} (beside it, by {how})"
-                         + (f"; {merged}" if merged else ""), why)
-        if hasattr(s, "link_goal"):  # like the console's Go to: the candidate follows a later merge of its object
-            s.link_goal(goal, obj.id)
-        out["object"] = {"id": obj.id, "label": obj.label}
-        if merged:
-            out["merged"] = f"{merged}: planned beside {obj.id}"
-        return out
-
-    def _plan(self, goal: tuple[float, float, float], what: str, why: str) -> dict[str, Any]:
-        before, self.agent_goal = self.agent_goal, tuple(float(v) for v in goal)  # type: ignore[assignment]
-        res = self.session.add_goal(goal)  # the panel labels the new candidate as the agent's (route event)
-        if not res.ok:
-            self.agent_goal = before
-            raise AgentError(f"goal: {res.message}")
-        self.session.notify("Agent planned a candidate", f"to {what}: {res.message}. It is proposed by the agent: "
-                            "Register or Discard it, or wait for the agent's mission proposal"
-                            + (f". Why: {why}" if why else ""), "info")
-        snap = self.session.route_snapshot()
-        pts = snap.candidate
-        return {"goal": [round(v, 3) for v in goal], "message": res.message,
-                "path_points": len(pts) if pts is not None else 0,
-                "max_height_m": round(float(pts[:, 2].max() - self.session.workspace.floor), 3) if pts is not None and len(pts) else None,
-                "note": "a candidate only: nothing moves; propose_mission asks the operator to execute it"}
-
-    def _op_propose_capture_and_map(self, args: Mapping[str, Any]) -> dict[str, Any]:
-        why = _text(args, "why", WHY_MAX, required=True)
-        if self.mapping is None:
-            raise AgentError("this console cannot capture (no mapping job)")
-
-        def act() -> str:
-            if not self.mapping.start():
-                raise SessionError("a capture is already being mapped")
-            return "capture and map started"
-
-        p = self.queue.propose("capture", "Capture & map: take a photo from where the robot is and map it", why, act)
-        return p.to_dict()
-
-    def _op_propose_search(self, args: Mapping[str, Any]) -> dict[str, Any]:
-        from console.session.search import SearchConfig, target_height
-
-        why = _text(args, "why", WHY_MAX, required=True)
-        target = _text(args, "target", NAME_MAX, required=True)
-        mode = _text(args, "mode", 16) or "auto"
-        captures = _number(args, "max_captures", 20.0)
-        if captures != int(captures):
-            raise AgentError(f"max_captures: must be a whole number, got {captures!r}")
-        try:
-            config = SearchConfig(target, mode=mode, max_captures=int(captures), target_height=target_height(target))
-        except SessionError as exc:
-            raise AgentError(str(exc)) from None
-        if self.search is None:
-            raise AgentError("this console has no search (Find)")
-
-        def act() -> str:
-            self.search.start(config)
-            return f"search for {target!r} started ({mode} mode, at most {plural(config.max_captures, 'capture')})"
-
-        p = self.queue.propose("search", f"Find {target!r}: choose viewpoints, move, capture and map until it is "
-                               f"found ({mode} mode, at most {plural(config.max_captures, 'capture')})", why, act)
-        return p.to_dict()
-
-    def _op_propose_look_around(self, args: Mapping[str, Any]) -> dict[str, Any]:
-        from console.session.look import DEFAULT_HEADINGS
-
-        why = _text(args, "why", WHY_MAX, required=True)
-        if self.look is None:
-            raise AgentError("this console has no Look around (no robot link that turns)")
-
-        def act() -> str:
-            self.look.look_around()
-            return f"look around started: {DEFAULT_HEADINGS} headings, a capture and map at each"
-
-        p = self.queue.propose("look", f"Look around: turn in place through {DEFAULT_HEADINGS} headings, capturing and "
-                               "mapping at each", why, act)
-        return p.to_dict()
-
-    def _op_propose_mission(self, args: Mapping[str, Any]) -> dict[str, Any]:
-        from console.views.mission_view import built_text, segment_table
-
-        why = _text(args, "why", WHY_MAX, required=True)
-        s = self.session
-        if self.runner is None:
-            raise AgentError("this console has no mission manager: missions cannot run")
-        if s.run.active:
-            raise AgentError("a mission is under way (running or paused): wait for it to end")
-        if s.route_snapshot().candidate is not None:
-            s.register()  # the candidate (the agent's or the operator's) joins the route
-        try:
-            mission = s.build_mission()
-        except SessionError as exc:
-            raise AgentError(f"mission: {exc}") from None
-        mid = mission.id
-
-        def act() -> str:
-            current = s.mission
-            if current is None or current.id != mid:
-                raise SessionError(f"the mission changed since the agent proposed {mid}: not executed")
-            blocker = s.operator_state(True).execute_blocker
-            if blocker is not None:
-                raise SessionError(f"Execute is off: {blocker}")
-            self.runner.execute(current)
-            return f"mission {mid} started: {built_text(current)}"
-
-        p = self.queue.propose("mission", f"Execute mission {mid}: {built_text(mission)}, {mission.length:.1f} m", why,
-                               act, details=segment_table(mission))
-        return {**p.to_dict(), "mission": mission.to_dict()}
-
-    def _op_withdraw_proposal(self, args: Mapping[str, Any]) -> dict[str, Any]:
-        pid = _text(args, "proposal_id", 64, required=True)
-        return self.queue.withdraw(pid, _text(args, "why", WHY_MAX) or "the agent gave up waiting").to_dict()
 
 
 def _brief(args: Mapping[str, Any]) -> dict[str, Any]:
