@@ -14,8 +14,9 @@ what a button would otherwise be refused for after the click:
   and, with its reason, on the ground (``the robot is not flying: nothing to land``; the button is hidden
   there, but a call is refused with these words).
 - **Hold** is off while the robot stands or hovers: it is holding already (``nothing to hold``).
-- **Return** says where it lands (:func:`return_hint`): at the take-off spot, not where the operator started
-  the last mission; or, when the robot may not land there (within its radius of a wall, an object on the
+- **Return** is off at critical charge (``battery 8 %: critical (below 10 %), the robot must land here, not fly
+  back``: like ArduPilot's critical battery failsafe with action Land). It says where it lands
+  (:func:`return_hint`): at the take-off spot, not where the operator started the last mission; or, when the robot may not land there (within its radius of a wall, an object on the
   spot), at the nearest spot it fits, with how far and why -- from :func:`planner.landing_spot.return_spots`,
   the function the session's Return plans to (:meth:`~console.session.operator_session.OperatorRules.return_mission`).
   With no such spot, Return is off with the reason.
@@ -132,6 +133,8 @@ def return_home(robot: RobotSnapshot | None, run: RunStatus, ws: Workspace, laun
     spot near the take-off spot fits the landing rule (with ``grid``: :func:`return_target`), or when it
     would be refused otherwise."""
     base = _why_hidden(rules.vehicle_commands(robot, run, ws, launch)["return"], robot, run)
+    if base.enabled and rules.battery_level(robot) == "critical":  # like BATT_FS_CRT_ACT=Land: no flying back
+        return CommandState(base.shown, False, f"{rules.battery_blocker(robot)} here, not fly back")
     if not base.enabled or launch is None or grid is None:
         return base
     target = return_target(grid, launch)
