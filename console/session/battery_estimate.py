@@ -140,6 +140,10 @@ def hover_text(charge: float | None, rate: float | None, critical: float = BATTE
     """What the robot panel says about the battery while the robot hovers (plain text)."""
     if charge is None or not isinstance(charge, (int, float)) or not math.isfinite(charge):
         return "hovering: battery charge unknown, no time estimate"
+    if charge <= 0.0:  # no drain to measure: the vehicle comes down now, whatever was wanted
+        return "hovering: battery empty: the robot comes down where it is"
+    if charge <= critical:
+        return f"hovering: battery at the critical level ({100 * critical:.0f} %): the robot lands now"
     left = time_left(charge, rate, critical)
     if left is None:
         return "hovering: measuring the battery drain for a time estimate…"

@@ -84,7 +84,7 @@ class OperatorRules:
     _abort_run: Callable[[], None] | None = None
     _battery_land: Callable[[], None] | None = None  # ends the run and lands here (VehicleCommands)
     _battery_warned = 0  # the battery level last warned about: 0 ok, 1 low, 2 critical
-    _battery_acting = False  # the critical-battery landing was started (once per flight)
+    _battery_acting = ""  # the critical-battery action started ("land", "end"; each once per flight)
     _land_nearest = False  # a search runs: Land here lands on the nearest seen-free floor (search_landing)
 
     # --- wiring --------------------------------------------------------------------------------
@@ -127,6 +127,9 @@ class OperatorRules:
                        and run.active else None)
             if retired is None and run.active and self._running is not None and not self._running.command:
                 retired = rules.battery_blocker(robot)  # low battery: the operator's mission does not resume
+            if retired is None and run.state == "paused" and "landing stopped: contact" in (run.message or ""):
+                retired = ("the landing stopped on contact: Resume would repeat the same descent; abort, "
+                           "then land elsewhere")  # a vertical descent meets the same surface again
             hovering = (robot is not None and run.state != "running" and rules.airborne(robot, ws)
                         and robot.mode in button_rules.HELD_MODES)
             returning = self._running is not None and self._running.command == "Return" and run.active
@@ -226,13 +229,15 @@ class OperatorRules:
                 self._battery_warned = level
         action = rules.battery_action(r, self._run, self._workspace)  # type: ignore[attr-defined]
         if not rules.airborne(r, self._workspace) and not self._run.active:  # type: ignore[attr-defined]
-            self._battery_acting = False  # re-armed on the ground with nothing running (once per flight)
-        if action is None or self._battery_acting:
+            self._battery_acting = ""  # re-armed on the ground with nothing running (once per flight)
+        if action is None or self._battery_acting == action:  # a landing stopped, then down: "end" still ends it
             return
+        if action == "end" and self._battery_acting == "land" and self._run.state == "running":  # type: ignore[attr-defined]
+            return  # the console's own landing settles after touchdown: not ended under it
         act = self._battery_land if action == "land" else self._abort_run
         if act is None:
             return
-        self._battery_acting = True
+        self._battery_acting = action
         threading.Thread(target=self._safe_battery_land, args=(act,), name=f"battery-{action}", daemon=True).start()
 
     @staticmethod

@@ -136,8 +136,9 @@ def battery_text(robot: RobotSnapshot) -> str:
     if b is None or not isinstance(b, (int, float)) or not math.isfinite(b):
         return "battery ?"
     level = battery_level(robot)
-    if level == "critical":
-        return f"<b style='color:#d62728'>battery {100 * b:.0f}% CRITICAL: landing</b>"
+    if level == "critical":  # what the vehicle does: on the ground it stays there
+        doing = "landing" if getattr(robot, "landed", None) is not True else "on the ground, do not take off"
+        return f"<b style='color:#d62728'>battery {100 * b:.0f}% CRITICAL: {doing}</b>"
     if level == "low":
         return f"<b style='color:#e67e22'>battery {100 * b:.0f}% low: land or Return</b>"
     return f"battery {100 * b:.0f}%"
