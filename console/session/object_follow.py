@@ -16,6 +16,11 @@ capture that later captures should have seen and did not. The session remembers 
   (:meth:`ObjectFollow.resolve_object`), or is refused saying it was removed and why (:class:`RemovedObject`;
   an id never in the map: :class:`UnknownObject`).
 
+An object the operator deletes (:meth:`~console.session.session.Session.delete_object`) is recorded too: its id
+is refused as ``office_chair-1 was deleted by the operator`` (:class:`RemovedObject`), and resolves again while
+an Undo has it back in the map. Of a merge, a removal by fusion and a deletion of the same id (an Undo brought
+it back in between), the newest speaks for it.
+
 A goal planned beside an object by another caller (the MCP agent's ``plan_to_object``) joins the same rule with
 :meth:`ObjectFollow.link_goal`; :meth:`ObjectFollow.followed_goal` tells it where its candidate went.
 
@@ -39,7 +44,8 @@ class UnknownObject(SessionError):
 
 
 class RemovedObject(SessionError):
-    """The object (or the one it was merged into) was removed from the map; the message says why."""
+    """The object (or the one it was merged into) was removed from the map by fusion or deleted by the
+    operator; the message says which and why."""
 
 
 def _near(a: Sequence[float], b: Sequence[float], tol: float) -> bool:
@@ -55,10 +61,25 @@ class ObjectFollow(SessionCore):
         d = self.__dict__
         return d.setdefault("_merged_into", {}), d.setdefault("_removed", {}), d.setdefault("_goal_objects", {})
 
+    @property
+    def _deleted(self) -> dict[str, str]:
+        """Object id -> how the operator took it out of the map (``deleted by the operator``), made on first use."""
+        return self.__dict__.setdefault("_deleted_by_operator", {})
+
+    def _record_deletion_locked(self, object_id: str) -> None:
+        """The operator deleted ``object_id``: :meth:`resolve_object` says so from now on (and resolves it again
+        while an Undo has it back in the map). The newest news of the id: a merge or a removal by fusion
+        recorded before (an Undo brought the object back since) no longer speaks for it."""
+        merged, removed, _ = self._fusion_log
+        merged.pop(object_id, None)
+        removed.pop(object_id, None)
+        self._deleted[object_id] = "deleted by the operator"
+
     def resolve_object(self, object_id: str) -> str:
         """The map object ``object_id`` is now: itself, or the object it was merged into (followed through
-        later merges). Raises :class:`RemovedObject` for an object removed from the map (saying why),
-        :class:`UnknownObject` for an id never in it (both are :class:`SessionError`)."""
+        later merges). Raises :class:`RemovedObject` for an object removed from the map by fusion (saying
+        why) or deleted by the operator (``office_chair-1 was deleted by the operator``), :class:`UnknownObject`
+        for an id never in it (both are :class:`SessionError`)."""
         with self._lock:
             if any(o.id == object_id for o in self._scene.objects):
                 return object_id  # in the map (again, after an Undo of the merge)
@@ -71,6 +92,8 @@ class ObjectFollow(SessionCore):
                 return oid
             if oid in removed:
                 raise RemovedObject(f"{oid} was removed from the map: {removed[oid]}")
+            if oid in self._deleted:
+                raise RemovedObject(f"{oid} was {self._deleted[oid]}")
             raise UnknownObject(f"no object {object_id!r} in the map")
 
     def link_goal(self, goal: Sequence[float], object_id: str) -> None:
@@ -107,7 +130,7 @@ class ObjectFollow(SessionCore):
         goal of the candidate this one replaces after a merge (:meth:`followed_goal`)."""
         with self._lock:
             merged, removed, _ = self._fusion_log
-            left = object_id in merged or object_id in removed
+            left = object_id in merged or object_id in removed or object_id in self._deleted
         oid = self.resolve_object(object_id) if left else object_id
         with self._lock:
             start = self._route.last_node()

@@ -335,7 +335,8 @@ class Session(SessionReads, Persistence, Undo, OperatorRules, KnownSpaceSession,
         return SpawnReport(tuple(added), tuple(updated), tuple(notes))
 
     def delete_object(self, object_id: str) -> list[str]:
-        """Remove an object from the map; the grid is rebuilt and the route re-checked."""
+        """Remove an object from the map; the grid is rebuilt and the route re-checked. Its id is then refused
+        as deleted by the operator (:meth:`~console.session.object_follow.ObjectFollow.resolve_object`)."""
         with self._lock:
             try:
                 self._scene.object(object_id)
@@ -343,6 +344,7 @@ class Session(SessionReads, Persistence, Undo, OperatorRules, KnownSpaceSession,
                 raise SessionError(f"no object {object_id!r} in the map (was it deleted in another tab?)") from None
             scene = self._scene.with_objects([o for o in self._scene.objects if o.id != object_id])
             notes = self._set_scene_locked(scene, f"delete {object_id}")
+            self._record_deletion_locked(object_id)
         self._emit([(SCENE, None), (GRID, None), (ROUTE, None), (MISSION, None), (SELECTION, None)])
         return notes
 
