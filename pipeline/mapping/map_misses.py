@@ -10,16 +10,16 @@ image, within :data:`MAX_MISS_RANGE`, no other mapped object on the line of sigh
 :func:`~pipeline.mapping.map_existence.visible_share`) and none of its detections matched it, it records a
 **miss** in the object's history (``used`` false, note :data:`MISS_NOTE`). The object's existence is then
 weighed (:func:`~pipeline.mapping.map_existence.log_odds`, an occupancy log-odds as OctoMap's): each
-detection counts for it by its score and by how much of the object its view showed, each miss against it
-by how much of the object's place that capture saw; an object whose log-odds falls below 0 is removed,
+detection counts for it by its score (half for a view of a part), each miss against it by how much of the
+object's place that capture saw; an object whose log-odds falls below 0 is removed,
 with the reason in the fusion's report ("suitcase-3: seen by 2 captures (in part), missed by 2 captures that
 saw its place: removed"). Pinned and operator-placed objects (:attr:`~pipeline.scene.SceneObject.is_pinned`) and
 objects with no detection in their history are never removed.
 
 What that gives: an object seen whole once goes after two clean misses, not one (the noisy simulator misses
 10 % of the detections); one seen only in part (its centre a guess) after one; two partial views that
-agreed after two; a capture whose view of the place is half hidden or half out of the image counts for
-less, and one that shows a place a mapped object hides counts nothing.
+agreed after two; a capture that shows under half of the object counts for less (a third of it: -0.9
+against -2.3), and one that shows a place a mapped object hides counts nothing.
 """
 
 from __future__ import annotations

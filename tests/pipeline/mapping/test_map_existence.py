@@ -7,6 +7,7 @@ pose ``world <- camera`` in the OpenCV optical frame (the helpers of test_map_mi
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import pytest
 
@@ -114,8 +115,6 @@ def test_a_pinned_or_operator_placed_object_is_never_removed(how: str) -> None:
     scene, _ = fuse(Scene(), _capture("one", (1.2, 0.8, 0.35), math.pi / 2,
                                       _obj("desk-1", "desk", (1.2, 2.95, 0.375), DESK, "one", (200, 150, 420, 330))))
     desk = scene.object("desk-1")
-    from dataclasses import replace
-
     desk = replace(desk, pinned=True) if how == "pinned" else replace(desk, source=Source(None, "manual"))
     scene = scene.with_objects([desk])
     for k in range(5):
