@@ -103,7 +103,9 @@ def test_on_tcp_nothing_reaches_the_vehicle_late_after_a_block() -> None:
     from mav_emulator import ArduCopterEmulator
 
     emu = ArduCopterEmulator(0, url=f"tcpin:127.0.0.1:{port}").start()
-    link = MavlinkLink(f"tcp:127.0.0.1:{port}", config(fly_speed=1.0))
+    # nothing is written after min(pose_timeout, heartbeat_timeout) of silence: 2 s, above a loaded machine's
+    # pauses (0.6 s seen with the helpers' 0.5 s) and below the failsafe's 3 s, so its BRAKE and LAND are held back
+    link = MavlinkLink(f"tcp:127.0.0.1:{port}", config(fly_speed=1.0, pose_timeout=2.0, heartbeat_timeout=2.0))
     try:
         link.connect(timeout=20.0)
         assert eventually(lambda: link.latest_state() is not None and link.latest_state().health == "ok", 30.0)

@@ -23,9 +23,10 @@ FAILSAFE_AFTER = 3.0
 """[s] far above a loaded machine's scheduling gaps: the failsafe starts on the fault injected, never before."""
 HEARTBEAT_TIMEOUT = 3.0
 """[s] a mission's LAND waits for a heartbeat (5 Hz) received after it decided: only 'later than the next one'."""
-STEADY = dict(pose_timeout=3.0, heartbeat_timeout=HEARTBEAT_TIMEOUT)
-"""A hold waits for stillness only while telemetry is valid: these tests are not about telemetry gaps, so a
-loaded machine's pause in the stream (> the helpers' 0.5 s pose time-out) must not end the wait."""
+STEADY = dict(pose_timeout=3.0, heartbeat_timeout=HEARTBEAT_TIMEOUT, ack_timeout=1.0, command_max_age=10.0)
+"""For the tests not about telemetry gaps or command time-outs: a hold waits for stillness only while
+telemetry is valid, so a loaded machine's pause in the stream (> the helpers' 0.5 s pose time-out) must not
+end the wait; an ACK slower than the helpers' 0.25 s x 3 within 2 s is not a refusal."""
 
 
 def _airborne(link, height: float = 1.5) -> None:
@@ -73,7 +74,7 @@ def test_a_vehicle_heard_again_during_the_failsafe_hold_is_not_landed() -> None:
 
 
 def test_land_here_lands_where_the_vehicle_is_without_flying_back() -> None:
-    with vehicle(fly_speed=2.0) as (link, emu):
+    with vehicle(config(**STEADY), fly_speed=2.0) as (link, emu):
         _airborne(link)
         run = link.run_segment(MissionSegment(FLY, ((2.5, 0.7, 1.5), (2.5, 6.0, 1.5))))
         assert eventually(lambda: emu.pos[0] > 2.0)
@@ -204,7 +205,7 @@ def test_a_vehicle_refusing_the_speed_is_warned_about_and_the_hold_still_waits_f
 
 def test_a_landing_starts_only_when_the_vehicle_has_stopped_over_the_spot() -> None:
     """Fault 9: arriving fast, LAND at 0.15 m while moving touches down past the spot."""
-    with vehicle(config(fly_speed=2.5, heartbeat_timeout=HEARTBEAT_TIMEOUT), **REAL) as (link, emu):
+    with vehicle(config(fly_speed=2.5, **STEADY), **REAL) as (link, emu):
         manager = mission_manager(link, failsafe_after=FAILSAFE_AFTER, failsafe_hold=0.5)
         manager.start(Mission((MissionSegment(TAKEOFF, ((2.5, 0.7, 0.0), (2.5, 0.7, 1.5))),
                                MissionSegment(FLY, ((2.5, 0.7, 1.5), (2.5, 4.0, 1.5))),
@@ -223,7 +224,7 @@ def test_a_landing_starts_only_when_the_vehicle_has_stopped_over_the_spot() -> N
 
 def test_a_segment_that_overruns_its_deadline_is_held_and_paused() -> None:
     # the link's own time-out is given 60 s of slack: the watchdog is what stops it here
-    with vehicle(config(timeout_slack=60.0), faults={"freeze_motion": True}) as (link, emu):
+    with vehicle(config(timeout_slack=60.0, **STEADY), faults={"freeze_motion": True}) as (link, emu):
         manager = mission_manager(link, failsafe_after=FAILSAFE_AFTER, failsafe_hold=0.5,
                                   watchdog_speeds=(2.0, 2.0, 2.0), watchdog_factor=1.0, watchdog_slack=1.0)
         manager.start(Mission((MissionSegment(WALK, ((2.5, 0.7, 0.0), (2.5, 2.7, 0.0))),)))
@@ -241,7 +242,7 @@ def test_a_segment_that_overruns_its_deadline_is_held_and_paused() -> None:
 def test_a_refusal_carries_only_its_own_reasons_even_when_they_follow_the_ack() -> None:
     """Fault 11: the reason arrives just after the ACK; unrelated INFO lines from before, and the
     previous attempt's reasons, are not repeated."""
-    with vehicle(faults={"reason_after_ack": True}) as (link, emu):
+    with vehicle(config(**STEADY), faults={"reason_after_ack": True}) as (link, emu):
         emu.say("EKF3 IMU0 initialised")
         emu.say("PreArm: Compass not calibrated", mav.MAV_SEVERITY_CRITICAL)  # an earlier, unrelated line
         assert eventually(lambda: len(link.latest_state().messages) >= 2)
@@ -268,7 +269,7 @@ def test_a_refusal_carries_only_its_own_reasons_even_when_they_follow_the_ack() 
 
 
 def test_disarm_is_refused_in_the_air() -> None:
-    with vehicle() as (link, emu):
+    with vehicle(config(**STEADY)) as (link, emu):
         _airborne(link)
         sent = [c for c, _ in emu.record.received].count(mav.MAV_CMD_COMPONENT_ARM_DISARM)
         with pytest.raises(LinkError, match="cannot disarm: the vehicle is in the air"):

@@ -31,6 +31,10 @@ def _flight(y: float = 9.0) -> Mission:
 
 FAILSAFE_AFTER = 3.0
 """[s] far above a loaded machine's scheduling gaps: the link failsafe starts on the fault injected, never before."""
+STEADY = dict(ack_timeout=1.0, command_max_age=10.0, pose_timeout=2.0, heartbeat_timeout=3.0)
+"""Command and telemetry time-outs a loaded machine's pauses do not reach (none is under test here): an ACK
+slower than 0.25 s x 3, or a 0.5 s pause in the position stream (resume reads the state sample: 'not heard
+from'), is not a fault of the vehicle's."""
 
 
 def _console_commands_after(emu, t0: float) -> tuple[int, list[str]]:
@@ -59,7 +63,7 @@ def _pause_message(manager) -> str:
 
 
 def test_a_battery_failsafe_rtl_pauses_the_mission_naming_mode_and_reason_and_the_climb_is_warned() -> None:
-    with vehicle(config(fly_speed=1.0), fly_speed=2.0, accel=3.0, brake_decel=3.0) as (link, emu):
+    with vehicle(config(fly_speed=1.0, **STEADY), fly_speed=2.0, accel=3.0, brake_decel=3.0) as (link, emu):
         emu.params["RTL_ALT"] = 600.0  # 6 m, in a 3 m high workspace
         _airborne(link)
         manager = mission_manager(link, failsafe_after=FAILSAFE_AFTER, failsafe_hold=0.5)
@@ -98,7 +102,8 @@ def test_a_battery_failsafe_rtl_pauses_the_mission_naming_mode_and_reason_and_th
 
 
 def test_after_taking_control_resume_switches_back_to_guided_and_completes() -> None:
-    with vehicle(config(fly_speed=1.0), fly_speed=2.0, accel=3.0, brake_decel=3.0, descent_rate=0.3) as (link, emu):
+    with vehicle(config(fly_speed=1.0, **STEADY), fly_speed=2.0, accel=3.0, brake_decel=3.0, descent_rate=0.3) \
+            as (link, emu):
         _airborne(link)
         manager = mission_manager(link, failsafe_after=FAILSAFE_AFTER, failsafe_hold=0.5)
         manager.start(_flight(4.0))
@@ -124,7 +129,7 @@ def test_after_taking_control_resume_switches_back_to_guided_and_completes() -> 
     (lambda emu: emu.other_gcs_set_mode("SMART_RTL"), "SMART_RTL", "no reason given"),
 ])
 def test_every_mode_the_vehicle_chooses_ends_the_consoles_control(change, mode, reason) -> None:
-    with vehicle(config(fly_speed=1.0), fly_speed=2.0, accel=3.0, brake_decel=3.0) as (link, emu):
+    with vehicle(config(fly_speed=1.0, **STEADY), fly_speed=2.0, accel=3.0, brake_decel=3.0) as (link, emu):
         _airborne(link)
         manager = mission_manager(link, failsafe_after=FAILSAFE_AFTER, failsafe_hold=0.5)
         manager.start(_flight())
@@ -140,7 +145,7 @@ def test_every_mode_the_vehicle_chooses_ends_the_consoles_control(change, mode, 
 
 def test_the_consoles_land_checks_the_mode_first() -> None:
     """An RTL that starts while the vehicle hovers over the landing spot is not replaced by a LAND."""
-    with vehicle(config(fly_speed=1.0)) as (link, emu):
+    with vehicle(config(fly_speed=1.0, **STEADY)) as (link, emu):
         _airborne(link)
         link.hold()  # BRAKE: the console's own mode
         emu.other_gcs_set_mode("RTL")
@@ -156,7 +161,7 @@ def test_the_consoles_land_checks_the_mode_first() -> None:
 
 def test_the_consoles_own_mode_changes_are_not_a_takeover() -> None:
     """Neighbour: hold (BRAKE), resume (GUIDED), land (LAND): the console's modes never read as the vehicle's."""
-    with vehicle(config(fly_speed=2.0, heartbeat_timeout=3.0)) as (link, emu):  # LAND confirms on a heartbeat
+    with vehicle(config(fly_speed=2.0, **STEADY)) as (link, emu):  # (the LAND confirms on a heartbeat: 3 s)
         manager = mission_manager(link, failsafe_after=FAILSAFE_AFTER, failsafe_hold=0.5)
         manager.start(Mission((MissionSegment(TAKEOFF, ((2.5, 0.7, 0.0), (2.5, 0.7, 1.5))),
                                MissionSegment(FLY, ((2.5, 0.7, 1.5), (2.5, 6.0, 1.5))),
@@ -234,7 +239,7 @@ def test_mode_authority_rules() -> None:
 def test_a_link_loss_while_the_vehicle_flies_its_own_mode_sends_nothing() -> None:
     """The vehicle took control (LAND by a battery failsafe), then the link is lost: the console's
     failsafe neither holds nor lands it (no BRAKE over the vehicle's own LAND)."""
-    with vehicle(config(fly_speed=1.0), descent_rate=0.2) as (link, emu):
+    with vehicle(config(fly_speed=1.0, **STEADY), descent_rate=0.2) as (link, emu):
         _airborne(link)
         manager = mission_manager(link, failsafe_after=FAILSAFE_AFTER, failsafe_hold=0.5)
         manager.start(_flight())
