@@ -181,6 +181,7 @@ class AStarSearcher:
         no_corner_cutting: bool = False,
         layer_heuristic: bool = True,
         layer_budget: int | None = None,
+        no_land: np.ndarray | None = None,
     ) -> AStarResult:
         """Least-cost path from ``start`` to ``goal``; see :func:`astar`."""
         arr = _as_cost(cost)
@@ -204,6 +205,7 @@ class AStarSearcher:
             budget = int(layer_budget)
         if not layer_heuristic or w == 0.0:
             budget = _NEVER
+        gate = _no_land(no_land, (nx, ny))
         mt = self._prepare((nx, ny, nz))
         fs = (s[0] * ny + s[1]) * nz + s[2]
         ft = (t[0] * ny + t[1]) * nz + t[2]
@@ -216,7 +218,7 @@ class AStarSearcher:
         while True:
             status, c, expanded, n, self._hk, self._hi = _search(
                 flat, nx, ny, nz, fs, ft, float(resolution), hscale,
-                bool(no_corner_cutting), mt.flat, mt.dx, mt.dy, mt.dz, mt.swept, mt.n_swept,
+                bool(no_corner_cutting), gate is not _NO_GATE, gate, mt.flat, mt.dx, mt.dy, mt.dz, mt.swept, mt.n_swept,
                 self._g, self._state, self._parent, self._hpos, self._gen, self._hk, self._hi, n, expanded,
                 lay, w * _MARGIN, lh.d2, lh.rcol, lh.levels, lh.dw, lh.s, lh.mfres, lh.zg, budget)
             if status != 3:
@@ -235,6 +237,22 @@ class AStarSearcher:
         return AStarResult(path, float(c), int(expanded), True, kind)
 
 
+_NO_GATE = np.zeros(1, np.uint8)
+
+
+def _no_land(mask: np.ndarray | None, plan: tuple[int, int]) -> np.ndarray:
+    """``mask`` (``bool [nx, ny]``: ground cells where no landing may end) as the kernel's flat
+    ``uint8`` array, or :data:`_NO_GATE` when there is none; raises ValueError on a wrong shape."""
+    if mask is None:
+        return _NO_GATE
+    m = np.asarray(mask)
+    if m.shape != plan:
+        raise ValueError(f"no_land must be a bool array of the grid's plan shape {plan}, got shape {m.shape}")
+    if not m.any():
+        return _NO_GATE
+    return np.ascontiguousarray(m.reshape(-1), dtype=np.uint8)
+
+
 _local = threading.local()
 
 
@@ -249,6 +267,7 @@ def astar(
     no_corner_cutting: bool = False,
     layer_heuristic: bool = True,
     layer_budget: int | None = None,
+    no_land: np.ndarray | None = None,
 ) -> AStarResult:
     """Least-cost 26-connected path through ``cost[nx, ny, nz]`` from ``start`` to ``goal`` cells.
 
@@ -267,6 +286,9 @@ def astar(
         layer_budget: Expansions made with the octile bound alone before the per-goal tables of
             the layer-aware heuristic are built and the open list re-keyed (``None``:
             :func:`default_layer_budget`, about what the tables cost; 0: from the start).
+        no_land: ``bool [nx, ny]``: ground cells ``(i, j, 0)`` no path may land on (no move from an air
+            cell ``k >= 1`` down into them); walking through them and taking off from them stay allowed.
+            Removing moves keeps both heuristics admissible and consistent (they bound every path).
 
     The first heuristic ``h(a) = min_cost * resolution * octile(a, goal)`` is consistent: octile is
     the shortest-path metric of the 26-lattice with move lengths ``sqrt(n)``, so it obeys the
@@ -286,7 +308,7 @@ def astar(
         searcher = _local.searcher = AStarSearcher()
     return searcher.search(cost, start, goal, resolution=resolution, heuristic_weight=heuristic_weight,
                            min_cost=min_cost, no_corner_cutting=no_corner_cutting,
-                           layer_heuristic=layer_heuristic, layer_budget=layer_budget)
+                           layer_heuristic=layer_heuristic, layer_budget=layer_budget, no_land=no_land)
 
 
 def dijkstra_reference(
@@ -296,8 +318,9 @@ def dijkstra_reference(
     resolution: float = 1.0,
     *,
     no_corner_cutting: bool = False,
+    no_land: np.ndarray | None = None,
 ) -> AStarResult:
-    """Plain pure-Python Dijkstra with the same moves and edge costs as :func:`astar`.
+    """Plain pure-Python Dijkstra with the same moves and edge costs as :func:`astar` (``no_land`` too).
 
     Slow; meant for tests on small grids.
     """
@@ -323,6 +346,8 @@ def dijkstra_reference(
         for m in moves:
             v = (u[0] + m[0], u[1] + m[1], u[2] + m[2])
             if not all(0 <= v[a] < shape[a] for a in range(3)) or not math.isfinite(cost[v]):
+                continue
+            if no_land is not None and v[2] == 0 and u[2] > 0 and no_land[v[0], v[1]]:
                 continue
             if no_corner_cutting and any(
                 not math.isfinite(cost[u[0] + c[0], u[1] + c[1], u[2] + c[2]]) for c in _swept(m)

@@ -219,7 +219,7 @@ def _hc(vx, vy, vz, tx, ty, tz, ny, hscale, lw, d2, rcol, levels, dw, s, mfres, 
 
 
 @njit(cache=True)
-def _core(cost, nx, ny, nz, t, elen, hscale, no_cc,
+def _core(cost, nx, ny, nz, t, elen, hscale, no_cc, gated, no_land,
           offs, ddx, ddy, ddz, swept, n_swept,
           gbuf, state, parent, hpos, open_tag, hk, hi, n, expanded,
           budget, lw, d2, rcol, levels, dw, s, mfres, zg):
@@ -227,7 +227,9 @@ def _core(cost, nx, ny, nz, t, elen, hscale, no_cc,
     next expansion (2, resumable: grow the heap and call again) or, with the octile heuristic
     (``d2 is None``), ``budget`` expansions are reached (3, resumable: switch to the layer-aware
     heuristic). ``state[i] == open_tag`` marks a cell whose g is valid in this search (and, until it is
-    closed, whose heap slot is ``hpos[i]``), ``open_tag + 1`` a closed one. Returns ``(status, heap size,
+    closed, whose heap slot is ``hpos[i]``), ``open_tag + 1`` a closed one. With ``gated``, a move from
+    the air (``k >= 1``) down to a ground cell ``(i, j, 0)`` with ``no_land[i * ny + j]`` set is not
+    taken (a landing there is refused; walking through the cell is not). Returns ``(status, heap size,
     expanded, cost)``. One loop for both heuristics: numba compiles it once with ``d2`` an array
     (layer-aware) and once with ``None`` (octile), where the layer-aware code and the budget's
     counterpart are left out, so the walk cases' hot loop stays as small as a loop of its own."""
@@ -268,6 +270,9 @@ def _core(cost, nx, ny, nz, t, elen, hscale, no_cc,
             cv = cost[v]
             if cv == np.inf:
                 continue
+            if gated:
+                if vz == 0 and uz > 0 and no_land[vx * ny + vy]:
+                    continue
             sv = state[v]
             if sv == closed_tag:
                 continue
@@ -300,12 +305,13 @@ def _core(cost, nx, ny, nz, t, elen, hscale, no_cc,
 
 
 @njit(cache=True)
-def _search(cost, nx, ny, nz, s0, t, step, hscale, no_cc,
+def _search(cost, nx, ny, nz, s0, t, step, hscale, no_cc, gated, no_land,
             offs, ddx, ddy, ddz, swept, n_swept,
             gbuf, state, parent, hpos, gen, hk, hi, n, expanded,
             lay, lw, d2, rcol, levels, dw, s, mfres, zg, budget):
     """A* from flat index ``s0`` to ``t``; returns ``(status, cost, expanded, n, hk, hi)`` (status
-    as :func:`_core`, never 2) where the heap arrays may have been replaced by larger ones.
+    as :func:`_core`, never 2) where the heap arrays may have been replaced by larger ones. ``gated`` and
+    ``no_land`` (``uint8 [nx * ny]``; any one-element array when not gated): the landings refused.
     ``n == 0`` starts a new search, otherwise the heap ``hk[:n], hi[:n]`` is resumed. ``step`` is
     the cell size [m], ``hscale = weight * min_cost * step``. Keeping the growth out of the hot
     loop lets numba treat the heap arrays there as loop-invariant."""
@@ -330,11 +336,11 @@ def _search(cost, nx, ny, nz, s0, t, step, hscale, no_cc,
         n = 1
     while True:
         if lay:
-            status, n, expanded, c = _core(cost, nx, ny, nz, t, elen, hscale, no_cc, offs, ddx, ddy, ddz, swept,
+            status, n, expanded, c = _core(cost, nx, ny, nz, t, elen, hscale, no_cc, gated, no_land, offs, ddx, ddy, ddz, swept,
                                            n_swept, gbuf, state, parent, hpos, open_tag, hk, hi, n, expanded,
                                            budget, lw, d2, rcol, levels, dw, s, mfres, zg)
         else:
-            status, n, expanded, c = _core(cost, nx, ny, nz, t, elen, hscale, no_cc, offs, ddx, ddy, ddz, swept,
+            status, n, expanded, c = _core(cost, nx, ny, nz, t, elen, hscale, no_cc, gated, no_land, offs, ddx, ddy, ddz, swept,
                                            n_swept, gbuf, state, parent, hpos, open_tag, hk, hi, n, expanded,
                                            budget, lw, None, rcol, levels, dw, s, mfres, zg)
         if status != 2:

@@ -6,7 +6,9 @@ rule fits when it no longer does, e.g. within the robot's radius of a wall: :fun
 land through this rule:
 :func:`landing_problem` for one spot, :func:`landing_mask` for every floor cell at once (the two agree on
 cell centres). Every mission the planner builds checks its landing spots with it
-(:func:`planner.mission.check_landing`).
+(:func:`planner.mission.check_landing`), and every route the planner plans (Go look, Go to, a clicked
+goal, a search's move) lands only where it fits (:func:`no_landing`), so Build never refuses an offered
+route for its landing.
 
 A spot ``(x, y)`` on the floor is fit for landing when the robot's whole **footprint** there -- the floor
 cells whose centre lies within ``robot.radius`` of ``(x, y)`` in plan, and the cell holding it --
@@ -213,6 +215,40 @@ def landing_mask(grid: PlanningGrid, forced: bool = False, clear: bool = False) 
     return ~bad
 
 
+_GATE: list[tuple[PlanningGrid, np.ndarray]] = []  # the last grid's no-landing mask (routes ask on every plan)
+
+
+def no_landing(grid: PlanningGrid) -> np.ndarray:
+    """``bool [nx, ny]``: the floor cells no route may land on, by the rule every mission's landing is
+    checked with (:func:`planner.mission.check_landing` and the mission's landing spot: free ground, nothing
+    right above): ``~landing_mask(grid, clear=True)``, and the cells with a closed cell right above them.
+    The planner takes no move from the air down into them (:func:`planner.astar.astar`'s ``no_land``); the
+    robot still walks through them and takes off from them. The last grid's answer is kept."""
+    last = _GATE[0] if _GATE else None  # one read: another thread may replace it
+    if last is not None and last[0] is grid:
+        return last[1]
+    gate = ~landing_mask(grid, clear=True)
+    if grid.state.shape[2] > 1:
+        gate |= grid.state[:, :, 1] == CellState.OCCUPIED
+    _GATE[:] = [(grid, gate)]
+    return gate
+
+
+def refused_landing(grid: PlanningGrid, cells: np.ndarray) -> str | None:
+    """The first landing of the cell path ``cells`` (K x 3, start..goal) on a floor cell :func:`no_landing`
+    refuses, in the operator's words (``the only routes land at (1.62, 6.12), where the floor under ...``),
+    or ``None`` when every landing of the path is fit."""
+    cells = np.asarray(cells, dtype=np.int64).reshape(-1, 3)
+    gate = no_landing(grid)
+    for a, b in zip(cells[:-1], cells[1:]):
+        if a[2] > 0 and b[2] == 0 and gate[b[0], b[1]]:
+            c = grid.workspace.centers(b[None, :])[0]
+            problem = landing_problem(grid, c[:2], clear=True)
+            why = problem.text if problem is not None else "a cell right above it is closed for the robot's size"
+            return f"the only routes land at {_pt(c[0], c[1])}, where the robot may not land: {why}"
+    return None
+
+
 def return_spots(grid: PlanningGrid, launch: Sequence[float], limit: int = 8) -> tuple[list[tuple[float, float, float]], str]:
     """Where Return may land, nearest first, and why not at the take-off spot ``launch`` (world [m]).
 
@@ -246,5 +282,5 @@ def return_spots(grid: PlanningGrid, launch: Sequence[float], limit: int = 8) ->
     return [(float(centres[n, 0]), float(centres[n, 1]), float(ws.floor)) for n in order], why
 
 
-__all__ = ["LandingProblem", "OBSTACLE_CELLS", "footprint", "landing_mask", "landing_problem", "return_spots",
-           "unseen_footprint"]
+__all__ = ["LandingProblem", "OBSTACLE_CELLS", "footprint", "landing_mask", "landing_problem", "no_landing",
+           "refused_landing", "return_spots", "unseen_footprint"]

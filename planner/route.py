@@ -29,8 +29,10 @@ from planner.astar import AStarSearcher, min_finite_cost
 from planner.clearance import crowding
 from planner.cspace import box_distance, edge_blockers, edge_gaps
 from planner.grid import Closed, CostWeights, PlanningGrid
+from planner.landing_spot import no_landing
 from planner.mission import Mission, count_text, mission_from_cells
 from planner.goal_look import next_look
+from planner.no_path import no_path_text
 from planner.viewpoint import frontier_spot, suggest_viewpoint
 
 Vec3 = tuple[float, float, float]
@@ -372,19 +374,11 @@ class Route:
             text, vp = self._refusal(g, goal, "goal")
             return PlanResult(False, text, viewpoint=vp, frontier=self._last_frontier)
         t0 = time.perf_counter()
-        with self._search_lock:
-            res = self._searcher.search(self._cost, s, g, resolution=self._grid.workspace.resolution,
-                                        min_cost=self._min_cost, no_corner_cutting=self.no_corner_cutting)
+        res = self._search(s, g, no_landing(self._grid))  # lands only where Build lets it (landing_spot)
         dt = time.perf_counter() - t0
-        if not res.found:
-            hint = ""
-            if self._grid.rule == "closed" and self._grid.reason is not None and \
-                    bool(np.any(self._grid.reason == Closed.UNKNOWN)):
-                hint = " or unseen space (Look around, or plan with unknown space allowed)"
-            elif self._grid.rule == "allow" and goal[2] - self._grid.workspace.floor < self._grid.workspace.resolution:
-                hint = " (with unknown space allowed the robot still lands only on seen-free floor)"
-            return PlanResult(False, f"no path from {_fmt(start)} to {_fmt(goal)}: the goal is cut off by obstacles{hint}",
-                              expanded=res.expanded, seconds=dt)
+        if not res.found:  # the same search without the landing rule names the landing it refuses
+            ungated = self._search(s, g, None) if no_landing(self._grid).any() else None
+            return PlanResult(False, no_path_text(self._grid, start, goal, ungated), expanded=res.expanded, seconds=dt)
         cells = res.path.astype(np.int64)
         end = self._end_point(g)
         unseen, unseen_m = self.unseen_part(cells)
@@ -397,6 +391,12 @@ class Route:
             pts = path_points(cells[[idx[0], idx[-1]]], self._grid)
             msg += f"; {unseen_m:.2f} m of it through unseen space (between {_fmt(pts[0])} and {_fmt(pts[1])})"
         return PlanResult(True, msg, cells, float(res.cost), int(res.expanded), dt, end, unseen, unseen_m)
+
+    def _search(self, s: Sequence[int], g: Sequence[int], no_land: np.ndarray | None) -> Any:
+        with self._search_lock:
+            return self._searcher.search(self._cost, s, g, resolution=self._grid.workspace.resolution,
+                                         min_cost=self._min_cost, no_corner_cutting=self.no_corner_cutting,
+                                         no_land=no_land)
 
     def unseen_part(self, cells: np.ndarray) -> tuple[np.ndarray | None, float]:
         """Per path cell whether it is unseen, and the metres of moves ending in unseen cells."""

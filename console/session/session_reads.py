@@ -12,7 +12,8 @@ from planner.mission import Mission
 from planner.route import path_points
 
 from console.session.session_core import SessionCore
-from console.session.session_types import CaptureRecord, JobStatus, RobotSnapshot, RouteSnapshot, RunStatus, Settings
+from console.session.session_types import (CaptureRecord, JobStatus, RobotSnapshot, RouteSnapshot, RunStatus, SessionError,
+                                          Settings)
 
 
 class SessionReads(SessionCore):
@@ -89,3 +90,23 @@ class SessionReads(SessionCore):
             goals = tuple(tuple(float(v) for v in s[-1]) for s in segs if len(s))
             running = getattr(self, "_run_start", None) if self._run.active else None
             return RouteSnapshot(r.start if running is None else running, segs, cand, r.candidate_goal, goals)  # type: ignore[arg-type]
+
+    def build_refusal(self) -> str | None:
+        """What Build mission would be refused with now for the registered path (the very words of
+        :meth:`build_mission`: the same split and landing checks), or ``None`` (builds, or nothing registered;
+        the mission state's rule is :mod:`console.session.mission_rules`'). Kept until the route or the grid changes."""
+        with self._lock:
+            segs, grid = tuple(self._route.registered), self._grid
+            last = getattr(self, "_build_check", None)
+            if last is not None and last[0] is grid and len(last[1]) == len(segs) and all(
+                    a is b for a, b in zip(last[1], segs)):
+                return last[2]
+            why = None
+            if segs:
+                try:
+                    self._build_locked()  # type: ignore[attr-defined]
+                except SessionError as exc:
+                    why = str(exc)
+            self._build_check = (grid, segs, why)
+            return why
+

@@ -43,8 +43,12 @@ def max_height(segment: Any, floor: float = 0.0) -> float:
     return max(float(w[2]) for w in segment.waypoints) - floor
 
 
-def no_mission_text(registered: int) -> str:
-    """The mission panel without a mission: what to do next, given the count of registered segments."""
+def no_mission_text(registered: int, refused: str | None = None) -> str:
+    """The mission panel without a mission: what to do next, given the count of registered segments, or
+    why Build mission is refused for the registered path (``refused``: shown until the route changes)."""
+    if registered and refused:
+        return (f"<small style='color:#b35c00'>No mission: <b>Build mission</b> is refused for this path: "
+                f"{html.escape(refused)}. Plan the goal again (Clear, then click it).</small>")
     if registered:
         return "<small>No mission yet: <b>Build mission</b> turns the registered path into one.</small>"
     return "<small>No mission yet: register a path, then <b>Build mission</b>.</small>"
@@ -82,6 +86,12 @@ def segment_table(mission: Mission, current: int | None = None) -> str:
     return "\n".join(rows)
 
 
+def _route_key(session: Session) -> tuple[Any, ...]:
+    """What identifies the registered route (its start and cells): a Build refusal is shown until it changes."""
+    snap = session.route_snapshot()
+    return (tuple(snap.start), tuple(p.tobytes() for p in snap.registered))
+
+
 class MissionView:
     """Mission building, listing and execution controls.
 
@@ -96,6 +106,7 @@ class MissionView:
         self._server = server
         self.read_only = bool(read_only)  # replay: nothing is built or changed
         self._run_mission: tuple[str | None] | None = None  # the mission a finished run's line belongs to
+        self._refused: tuple[Any, str] | None = None  # (route key, why) of the last Build refused
         self._session = session
         self._runner = runner
         self._lock = threading.Lock()
@@ -151,6 +162,8 @@ class MissionView:
         try:
             mission = self._session.build_mission()
         except SessionError as exc:
+            self._refused = (_route_key(self._session), str(exc))  # in the panel until the route changes
+            self.refresh()
             tell(event.client, "No mission", str(exc), "yellow")
             return
         tell(event.client, "Mission built", built_text(mission), "green")
@@ -186,10 +199,19 @@ class MissionView:
             mission = self._session.mission
             run: RunStatus = self._session.run
             registered = len(self._session.route_snapshot().registered)
-            self._build.disabled = not rules.route_edits(False, registered, self.read_only, run.state)["build"]
             build_off = mission_rules.blocker("build", run.state) if registered and not self.read_only else None
+            if registered and not self.read_only and build_off is None:  # what the click would be refused with
+                build_off = self._session.build_refusal()
+            self._build.disabled = (not rules.route_edits(False, registered, self.read_only, run.state)["build"]
+                                    or build_off is not None)
+            key = _route_key(self._session)
+            if self._refused is not None and self._refused[0] != key:
+                self._refused = None  # the route changed: the refusal no longer applies
+            refused = build_off if build_off is not None and build_off.startswith("cannot build") else None
+            if refused is None and self._refused is not None:
+                refused = self._refused[1]
             if mission is None:
-                self._table.content = no_mission_text(registered)
+                self._table.content = no_mission_text(registered, refused)
             else:
                 self._table.content = segment_table(mission, run.segment if run.active else None)
             view = self._session.operator_state(self._runner is not None)
@@ -206,8 +228,8 @@ class MissionView:
             self._build.hint = build_hint
             self._hints.content = hint_spans([(self._build, build_hint), (self._execute, self._execute.hint)])
             notes = []
-            if build_off is not None:  # one rule per button and mission state (console.session.mission_rules)
-                notes.append(f"Build mission is off: {build_off}")
+            if build_off is not None and build_off != refused:  # one rule per button and mission state
+                notes.append(f"Build mission is off: {build_off}")  # (mission_rules; a refusal: in the table)
             if view.execute_blocker is not None and not run.active and mission is not None:
                 notes.append(f"Execute is off: {view.execute_blocker}")
             if view.route_note is not None and view.route_note != view.execute_blocker:
