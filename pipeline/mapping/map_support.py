@@ -90,12 +90,14 @@ def supported_z(obj: SceneObject, others: Sequence[SceneObject]) -> tuple[float,
     h = obj.size[1]
     bottom = obj.position[2] - h / 2
     best: tuple[float, SceneObject] | None = None
+    reach = math.hypot(obj.size[0], obj.size[2]) / 2
     for o in others:
         if o.id == obj.id:
             continue
         top = o.position[2] + o.size[1] / 2
         gap = abs(bottom - top)
-        if top > SUPPORT_TOLERANCE and gap <= SUPPORT_REACH and footprint_overlap(obj, o) >= MIN_SUPPORT_OVERLAP:
+        if top > SUPPORT_TOLERANCE and gap <= SUPPORT_REACH and _near(obj, o, reach) \
+                and footprint_overlap(obj, o) >= MIN_SUPPORT_OVERLAP:
             if best is None or gap < best[0]:
                 best = (gap, o)
     if best is not None:
@@ -130,8 +132,7 @@ def settle(objects: list[SceneObject], touched: set[str]) -> list[tuple[str, str
         for o in objects:
             if o.id in chosen or o.is_pinned or o.label not in FLOOR_STANDING or o.position[2] <= b.position[2]:
                 continue
-            if math.dist(o.position[:2], b.position[:2]) <= reach + math.hypot(o.size[0], o.size[2]) / 2 \
-                    and footprint_overlap(o, b) >= MIN_SUPPORT_OVERLAP:
+            if _near(b, o, reach) and footprint_overlap(o, b) >= MIN_SUPPORT_OVERLAP:
                 chosen.add(o.id)
                 queue.append(o)
     out: list[tuple[str, str]] = []
@@ -147,3 +148,8 @@ def settle(objects: list[SceneObject], touched: set[str]) -> list[tuple[str, str
         if what:
             out.append((o.id, what))
     return out
+
+
+def _near(a: SceneObject, b: SceneObject, reach_a: float) -> bool:
+    """Whether the footprints may overlap: centres (x, y) within both half-diagonals (``reach_a``: ``a``'s)."""
+    return math.dist(a.position[:2], b.position[:2]) <= reach_a + math.hypot(b.size[0], b.size[2]) / 2 + 1e-9
