@@ -16,8 +16,8 @@ what a button would otherwise be refused for after the click:
 - **Hold** is off while the robot stands or hovers: it is holding already (``nothing to hold``).
 - **Return** is off at critical charge (``battery 8 %: critical (below 10 %), the robot must land here, not fly
   back``: like ArduPilot's critical battery failsafe with action Land). It says where it lands
-  (:func:`return_hint`): at the take-off spot, not where the operator started the last mission; or, when the robot may not land there (within its radius of a wall, an object on the
-  spot), at the nearest spot it fits, with how far and why -- from :func:`planner.landing_spot.return_spots`,
+  (:func:`return_hint`): at the take-off spot, not where the operator started the last mission; or, when the
+  robot may not land there (within its radius of a wall, an object on the spot), at the nearest spot it fits, with how far and why -- from :func:`planner.landing_spot.return_spots`,
   the function the session's Return plans to (:meth:`~console.session.operator_session.OperatorRules.return_mission`).
   With no such spot, Return is off with the reason.
 
