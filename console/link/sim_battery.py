@@ -20,8 +20,13 @@ from __future__ import annotations
 
 import logging
 import math
+import threading
+from typing import Callable
 
-from console.link.base import Mode, RunStatus
+import numpy as np
+
+from console.link.base import Mode, RunStatus, SegmentRun
+from console.link.sim_config import SimConfig
 from console.link.sim_motion import Phase
 
 log = logging.getLogger(__name__)
@@ -30,60 +35,73 @@ log = logging.getLogger(__name__)
 class SimBattery:
     """The battery failsafes of :class:`~console.link.sim.SimRobot` (a mixin: the robot holds the state)."""
 
+    config: SimConfig
+    _pos: np.ndarray
+    _floor: float
+    _landed: bool
+    _armed: bool
+    _battery: float
+    _battery_landing: bool
+    _phases: list[Phase]
+    _run: SegmentRun | None
+    _lock: threading.RLock
+    _say: Callable[[str, str], None]
+    _finish: Callable[..., None]
+
     def _landing_phases(self, mode: Mode, forced: bool = False) -> list[Phase]:
         """Straight down from where the robot is to the floor (or the first top face met), then settle."""
-        x, y = float(self._pos[0]), float(self._pos[1])  # type: ignore[attr-defined]
-        cfg = self.config  # type: ignore[attr-defined]
-        return [Phase("descend", mode, target=(x, y, self._floor), speed=cfg.descent_rate,  # type: ignore[attr-defined]
+        x, y = float(self._pos[0]), float(self._pos[1])
+        cfg = self.config
+        return [Phase("descend", mode, target=(x, y, self._floor), speed=cfg.descent_rate,
                       forced=forced),
                 Phase("settle", mode if forced else Mode.LANDING, duration=cfg.settle_time, forced=forced)]
 
     def _battery_failsafe(self) -> None:
         """Critical charge in the air: land where it is (once per flight); empty: :meth:`_battery_empty`."""
-        if self._battery <= 0.0:  # type: ignore[attr-defined]
+        if self._battery <= 0.0:
             self._battery_empty()
             return
-        if self._landed:  # type: ignore[attr-defined]
+        if self._landed:
             self._battery_landing = False
             return
-        if self._battery_landing or self._battery > self.config.battery_critical:  # type: ignore[attr-defined]
+        if self._battery_landing or self._battery > self.config.battery_critical:
             return
         self._battery_landing = True
-        log.info("simulated robot: battery %.0f %%, landing by itself", 100 * self._battery)  # type: ignore[attr-defined]
-        self._say("CRITICAL", "battery critical: landing")  # type: ignore[attr-defined]
-        self._finish(RunStatus.FAILED, f"battery critical ({100 * self._battery:.0f} %): landing",  # type: ignore[attr-defined]
+        log.info("simulated robot: battery %.0f %%, landing by itself", 100 * self._battery)
+        self._say("CRITICAL", "battery critical: landing")
+        self._finish(RunStatus.FAILED, f"battery critical ({100 * self._battery:.0f} %): landing",
                      say=False)
         self._phases = self._landing_phases(Mode.FAILSAFE)
 
     def _battery_empty(self) -> None:
         """0 %: come straight down and disarm, whatever was commanded (once; the descent is not stoppable)."""
-        phases = self._phases  # type: ignore[has-type]
+        phases = self._phases
         if phases and phases[0].forced:
             return  # coming down already
-        if self._landed:  # type: ignore[attr-defined]
-            if self._armed or self._run is not None:  # type: ignore[attr-defined]
-                self._finish(RunStatus.FAILED, "battery empty (0 %): the motors stop", say=False)  # type: ignore[attr-defined]
+        if self._landed:
+            if self._armed or self._run is not None:
+                self._finish(RunStatus.FAILED, "battery empty (0 %): the motors stop", say=False)
                 self._armed = False
-                self._say("CRITICAL", "battery empty: motors disarmed")  # type: ignore[attr-defined]
+                self._say("CRITICAL", "battery empty: motors disarmed")
             return
         log.info("simulated robot: battery empty, coming down")
-        self._say("CRITICAL", "battery empty: coming down where it is, motors off on touchdown")  # type: ignore[attr-defined]
-        self._finish(RunStatus.FAILED, "battery empty (0 %): the robot comes down where it is",  # type: ignore[attr-defined]
+        self._say("CRITICAL", "battery empty: coming down where it is, motors off on touchdown")
+        self._finish(RunStatus.FAILED, "battery empty (0 %): the robot comes down where it is",
                      say=False)
         self._phases = self._landing_phases(Mode.FAILSAFE, forced=True)
 
     def _battery_refusal(self) -> str | None:
         """Why no segment may run now (the battery is empty), or ``None``."""
-        if self._battery > 0.0:  # type: ignore[attr-defined]
+        if self._battery > 0.0:
             return None
-        return "battery empty (0 %): the robot cannot move" + ("" if self._landed  # type: ignore[attr-defined]
+        return "battery empty (0 %): the robot cannot move" + ("" if self._landed
                                                                  else " (it is coming down where it is)")
 
     def set_battery(self, fraction: float) -> None:
         """Set the charge (for tests and demos) [0..1]; the failsafes act on the next step."""
         if not (isinstance(fraction, (int, float)) and math.isfinite(fraction) and 0.0 <= fraction <= 1.0):
             raise ValueError(f"battery: must be a number within 0..1, got {fraction!r}")
-        with self._lock:  # type: ignore[attr-defined]
+        with self._lock:
             self._battery = float(fraction)
 
 
