@@ -316,7 +316,10 @@ class SimRobot(SimBattery, RobotLink):
         if ph.kind == "descend":
             self._meet_top(ph)
         assert ph.target is not None
-        target = np.asarray(ph.target, dtype=np.float64)
+        target = np.array(ph.target, dtype=np.float64)
+        walking = ph.kind == "move" and ph.mode is Mode.WALKING
+        if walking:  # a walk moves in plan; its height follows the ground under the body
+            target[2] = self._pos[2]
         delta = target - self._pos
         dist = float(np.linalg.norm(delta))
         step = min(dist, ph.speed * dt)
@@ -328,7 +331,9 @@ class SimRobot(SimBattery, RobotLink):
                 # the last point of a step that reaches the target is the target itself: rounding put a
                 # landing 1e-17 m under the floor, outside the workspace (seen on a loaded machine)
                 p = target.copy() if reaches and i == n else origin + delta * (step * i / n / dist)
-                if p[2] > self._pos[2] + 1e-6:  # rising: off the floor or the top it stood on
+                if walking:  # steps down any drop, up a ledge of at most STEP_UP (sim_contact)
+                    p[2] = self._contact.ground_under((p[0], p[1], self._pos[2]), self._floor)
+                elif p[2] > self._pos[2] + 1e-6:  # rising: off the floor or the top it stood on
                     self._landed = False
                 why = self._blocker(p)
                 touch = self._contact.blocked(self._pos, p) if why is None else None
@@ -340,7 +345,8 @@ class SimRobot(SimBattery, RobotLink):
                 self._progress_done += float(np.linalg.norm(p - self._pos))
                 self._pos = p
         if dist - step <= 1e-9:
-            self._pos = target
+            if not walking:  # a walk already stands at its target, at the ground's height
+                self._pos = target
             self._end_phase(ph)
             return dt - (dist / ph.speed if ph.speed > 0 else 0.0)
         return 0.0

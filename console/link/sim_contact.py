@@ -1,8 +1,8 @@
 """The simulated robot's body against the hidden world: where a motion would touch an object.
 
 The robot's body is a vertical cylinder: ``radius`` [m] around the body origin in plan and from
-the origin's height up to ``height`` [m] above it (the origin is on the floor when the robot
-walks). A hidden object is its oriented box (``SceneObject`` centre, ``(w, h, l)`` with ``l``
+the origin's height up to ``height`` [m] above it (the origin is on the ground when the robot
+walks: the floor or a top face it stands on). A hidden object is its oriented box (``SceneObject`` centre, ``(w, h, l)`` with ``l``
 along its yaw, ``w`` across it). The body *touches* an object when the object's footprint comes
 within ``radius`` of the origin in plan and their height ranges overlap.
 
@@ -16,6 +16,11 @@ robot touches down on it (:meth:`BodyContact.top_below`), as a landing gear does
 the body's centre and is at least the body's width (``2 * radius``) on its shorter side; otherwise
 it stops on the face's height and says why ("contact below at (x, y, z): too small to stand on").
 The world's boxes are upright (yaw only), so their top faces are level: none is too steep.
+
+A walking body follows the ground under it (:meth:`BodyContact.ground_under`): it stands on the highest
+top face under its footprint that it can step onto (at most :data:`STEP_UP` above its feet), else on
+the floor. It steps down any drop (off the sports mat, off a table it landed on); a face taller than
+:data:`STEP_UP` is not climbed: the body walks into its side ("contact ... ahead").
 
 A motion stops where the body would touch an object or a wall it is not already touching, or would
 come closer to one it touches (so a robot that starts against one can still move away). The
@@ -37,6 +42,11 @@ import numpy as np
 from pipeline.scene import SceneObject
 
 Vec3 = tuple[float, float, float]
+
+# [m] The highest ledge a walking body steps up onto. Chosen, not measured: a legged robot of this
+# size (0.45 m tall) steps over a door sill, a cable duct or a mat (0.02-0.05 m), while a stair riser
+# (about 0.17 m, the usual building-code limit) is left to flight; 0.10 m sits between them.
+STEP_UP = 0.10
 
 
 @dataclass(frozen=True)
@@ -137,6 +147,17 @@ class BodyContact:
             why = f"the surface under the robot is too small to stand on ({short:.2f} m wide)"
         return Touchdown(top, point, why)
 
+    def ground_under(self, p: Sequence[float], floor: float, step_up: float = STEP_UP) -> float:
+        """The height [m] (world z) a walking body's origin stands at with its centre at ``p`` (x, y;
+        ``p[2]`` is its feet's height now): the highest top face under the footprint (plan distance
+        < ``radius``) no higher than ``p[2] + step_up``, or ``floor`` when there is none. A drop is
+        stepped down whatever its height; a taller face is the body's contact ahead (:meth:`blocked`)."""
+        if not len(self._centre):
+            return float(floor)
+        dist, _ = self._plan_distance(p)
+        ok = (dist < self.radius - 1e-9) & (self._zhi <= float(p[2]) + step_up + 1e-9) & (self._zhi > floor)
+        return float(self._zhi[ok].max()) if ok.any() else float(floor)
+
     def _wall_gaps(self, p: Sequence[float]) -> np.ndarray:
         """Free space [m] between the body at ``p`` and each wall (x min, x max, y min, y max) and the
         ceiling; negative: the body crosses it."""
@@ -201,4 +222,4 @@ def contact_below_text(point: Vec3, why: str) -> str:
     return f"contact below at ({point[0]:.2f}, {point[1]:.2f}, {point[2]:.2f}): {why}"
 
 
-__all__ = ["BodyContact", "Touchdown", "contact_below_text", "contact_text"]
+__all__ = ["STEP_UP", "BodyContact", "Touchdown", "contact_below_text", "contact_text"]
