@@ -187,6 +187,7 @@ def run(out: Path, text: Path | None) -> int:
         t.body("execute")
         t.close_notices()
         page.get_by_role("button", name="Land here").first.wait_for(timeout=120_000)
+        t.say("Return title", page.get_by_role("button", name="Return", exact=True).get_attribute("title"))
         t.shot("tutorial-6-hover.png")
         # --- 7. look around from the air ---------------------------------------------------------------------
         ends = len([m for m in job_msgs if m.startswith("Look around: done")])
@@ -205,11 +206,15 @@ def run(out: Path, text: Path | None) -> int:
         t.type_goal(2.5, 5.3, 0.0)
         for k in range(6):
             looks = app.go_look.outcome.looks if app.go_look.outcome is not None else -1
+            seen = len(job_msgs)
             click_until(button(page, "Go look"), lambda: app.go_look.running or (
                 app.go_look.outcome is not None and app.go_look.outcome.looks != looks), f"Go look {k + 1}")
             wait_for(lambda: not app.go_look.running, f"Go look {k + 1} to end", 1800)
             out_ = app.go_look.outcome
+            steps = [m for m in job_msgs[seen:] if m.startswith("Go look: look ") or m.startswith("Go look: going")]
+            t.say(f"go look {k + 1} steps", list(dict.fromkeys(steps)))
             t.say(f"go look {k + 1}", f"{out_.message} (kinds {out_.kinds}, planned {out_.planned})")
+            t.say(f"go look {k + 1} pose [m]", tuple(round(float(v), 2) for v in app.link.latest_state().position))
             if out_.planned or s.job.error is not None:
                 break
         click_until(button(page, "Register"), lambda: len(s.route_snapshot().registered) >= 1, "Register")
@@ -228,6 +233,7 @@ def run(out: Path, text: Path | None) -> int:
         t.capture("the last Capture & map")
         t.say("capture line", s.job.message)
         t.say("battery [%]", round(100 * float(app.link.latest_state().battery)))
+        t.say("objects", f"{len(s.scene.objects)}, robot dogs {[o.id for o in s.scene.objects if o.label == 'robot_dog']}")
         t.close_notices()
         t.body("landing and capture")
         t.shot("tutorial-8-dog.png")
