@@ -14,10 +14,16 @@ import argparse
 import json
 import os
 import re
+import sys
 from pathlib import Path
 from typing import Any
 
 from console.cli.errors import CliError
+
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # pragma: no cover - Python 3.10 only: the same parser as the tomli package
+    import tomli as tomllib
 
 TEXT_KINDS = ("scene", "session", "history", "mission", "scene_graph", "search_result", "search_bench",
               "known_space", "json_schema", "world", "dataset_camera", "dataset_index", "bench_report",
@@ -80,8 +86,6 @@ def check_input_file(path: str | os.PathLike[str], expected: str, option: str = 
 def _check_toml(p: Path, label: str, expected: str, what_file: str) -> None:
     """Parse ``p`` as TOML (a camera file starting with ``{`` as its JSON form); :class:`CliError` naming
     ``label`` with the line and column of a syntax error, and saying so when the file is JSON instead."""
-    import tomllib
-
     from pipeline.file_kind import MAX_BYTES, MB, os_error_words
 
     limit = MAX_BYTES.get(expected, 5 * MB)

@@ -99,10 +99,12 @@ def _run(fn: Callable[[argparse.Namespace], int], command: str) -> Callable[[arg
         from pipeline.scene import SceneError
         from pipeline.bench.evaluate import BenchError
 
+        from console.cli.errors import CliError
+
         try:
             return fn(args)
-        except (_UserError, CameraError, ImageError, MapperError, ModelError, SceneError, BenchError, CatalogError,
-                OptionError, OSError) as exc:
+        except (_UserError, CliError, CameraError, ImageError, MapperError, ModelError, SceneError, BenchError,
+                CatalogError, OptionError, OSError) as exc:
             print(f"morphonavi {command}: error: {exc}", file=sys.stderr)
             return 2
 

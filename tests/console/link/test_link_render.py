@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import math
-import time
 
 import numpy as np
 import pytest
@@ -121,17 +120,16 @@ def test_proxy_models_give_object_shaped_silhouettes() -> None:
     assert len(colours) >= 3
 
 
-def test_render_of_the_paper_room_is_fast_enough() -> None:
+def test_a_repeated_render_of_the_paper_room_is_the_same_image() -> None:
+    # speed is a benchmark's job (bench/pipeline_speed.py), never a timed unit test: here the ray cache the
+    # first render fills must give the same image again
     renderer = SceneRenderer(paper_room(), (ROOM_MIN, ROOM_MAX))
     intr = Intrinsics(525.0, 525.0, 319.5, 239.5, 640, 480)
     cam = camera_pose_in_world(DEFAULT_START, CameraMount())
-    renderer.render(cam, intr)  # warm-up (ray cache)
-    t0 = time.perf_counter()
-    for _ in range(3):
-        r = renderer.render(cam, intr)
-    per_frame = (time.perf_counter() - t0) / 3
+    first = renderer.render(cam, intr)  # fills the ray cache
+    r = renderer.render(cam, intr)
     assert r.rgb.shape == (480, 640, 3)
-    assert per_frame < 1.0, f"640x480 render took {per_frame:.2f} s"
+    assert np.array_equal(r.rgb, first.rgb) and np.array_equal(r.depth, first.depth)
 
 
 def test_objects_not_in_the_world_frame_are_refused() -> None:

@@ -120,8 +120,8 @@ def test_mobilesam_masks_follow_real_objects() -> None:
         assert mask.area - inside < 0.05 * mask.area, obj["label"]  # and stays inside it
         assert mask.predicted_iou > 0.85
     print(f"\nMobileSAM on {img.shape[1]}x{img.shape[0]}: encoder {encoder_s:.2f} s, "
-          f"decoder {sam.last_timings['decoder'] / len(gt['objects']):.3f} s per box")
-    assert encoder_s < 15
+          f"decoder {sam.last_timings['decoder'] / len(gt['objects']):.3f} s per box (figures only: speed is "
+          "checked by bench/pipeline_speed.py, never by a timed test)")
 
 
 @needs_mobilesam
