@@ -42,7 +42,7 @@ MAX_MISS_RANGE = 4.5
 """Farthest camera distance [m] of the part of an object whose absence counts (the depth model's range,
 :data:`~pipeline.mapping.observation_sigma.DEPTH_RANGE`: farther, a small object may go undetected)."""
 
-MIN_MISS_SHARE = 0.25
+MIN_MISS_SHARE = 0.4
 """Least share of an object's box a capture must show (in view, unhidden, in range) to record a miss."""
 
 
