@@ -2,8 +2,8 @@
 
 The robot's body is a vertical cylinder: ``radius`` [m] around the body origin in plan and from
 the origin's height up to ``height`` [m] above it (the origin is on the ground when the robot
-walks: the floor or a top face it stands on). A hidden object is its oriented box (``SceneObject`` centre, ``(w, h, l)`` with ``l``
-along its yaw, ``w`` across it). The body *touches* an object when the object's footprint comes
+walks: the floor or a top face it stands on). A hidden object is its oriented box (``SceneObject``
+centre, ``(w, h, l)`` with ``l`` along its yaw, ``w`` across it). The body *touches* an object when the object's footprint comes
 within ``radius`` of the origin in plan and their height ranges overlap.
 
 The room's shell (the world file's ``room``: walls at its ``x`` and ``y`` bounds, the ceiling at its
