@@ -84,7 +84,6 @@ def _match(mapped: Sequence[SceneObject], truth: Sequence[SceneObject]) -> list[
 
 
 def test_search_and_rescue_loop_reaches_the_dog_against_the_hidden_truth() -> None:
-    t_start = time.perf_counter()
     robot = SimRobot(config=SimConfig(time_scale=10.0, **FAST))
     robot.connect()
     manager = MissionManager(robot)
@@ -131,4 +130,3 @@ def test_search_and_rescue_loop_reaches_the_dog_against_the_hidden_truth() -> No
     assert len(pairs) == len(scene.objects)  # every mapped label exists in the room
     errors = np.array([e for _, _, e in pairs])
     assert float(np.median(errors)) <= CENTRE_TOLERANCE_MEDIAN, sorted(errors)
-    assert time.perf_counter() - t_start < 30.0
