@@ -359,7 +359,7 @@ class ConsoleApp:
                 self._closers.append(self.go_look.stop)
             self.views["look"] = LookView(server, session, self.look,
                                           lambda: tuple(paths_holder["p"].typed_values()[:2]),  # type: ignore[arg-type]
-                                          go_look=self.go_look)
+                                          go_look=self.go_look, capture=cap, mapping=self.mapping)
             from console.views.held_capture import HeldCaptureControls  # Merge / Replace / Discard a held-back capture
 
             self.views["held_capture"] = HeldCaptureControls(server, session, self.mapping)
@@ -375,6 +375,7 @@ class ConsoleApp:
             self.views["redo"] = RedoView(server, session, getattr(self.views["objects"], "_undo", None))
         with gui.add_folder("Plan"):
             paths_holder["p"] = self.views["paths"] = PathsView(server, session)
+            self.views["look"].follow_goal(paths_holder["p"].goal_fields)  # Look at goal / Go look: off at the robot
             self.views["unknown_toggle"] = UnknownToggle(server, session)
         with gui.add_folder("Find", expand_by_default=False):  # the search: viewpoints, moves, captures until found
             from console.session.search import SearchJob, target_height

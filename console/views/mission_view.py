@@ -43,15 +43,17 @@ def max_height(segment: Any, floor: float = 0.0) -> float:
     return max(float(w[2]) for w in segment.waypoints) - floor
 
 
-def no_mission_text(registered: int, refused: str | None = None) -> str:
+def no_mission_text(registered: int, refused: str | None = None, run_state: str = "idle") -> str:
     """The mission panel without a mission: what to do next, given the count of registered segments, or
-    why Build mission is refused for the registered path (``refused``: shown until the route changes)."""
+    why Build mission is refused for the registered path (``refused``: shown until the route changes);
+    after a mission ended (``run_state`` ``done`` / ``aborted``) it says so instead of "No mission yet"."""
     if registered and refused:
         return (f"<small style='color:#b35c00'>No mission: <b>Build mission</b> is refused for this path: "
                 f"{html.escape(refused)}. Plan the goal again (Clear, then click it).</small>")
     if registered:
         return "<small>No mission yet: <b>Build mission</b> turns the registered path into one.</small>"
-    return "<small>No mission yet: register a path, then <b>Build mission</b>.</small>"
+    first = {"done": "Mission done", "aborted": "Mission aborted"}.get(run_state, "No mission yet")
+    return f"<small>{first}: register a path, then <b>Build mission</b>.</small>"
 
 
 def built_text(mission: Mission) -> str:
@@ -211,7 +213,7 @@ class MissionView:
             if refused is None and self._refused is not None:
                 refused = self._refused[1]
             if mission is None:
-                self._table.content = no_mission_text(registered, refused)
+                self._table.content = no_mission_text(registered, refused, run.state)
             else:
                 self._table.content = segment_table(mission, run.segment if run.active else None)
             view = self._session.operator_state(self._runner is not None)

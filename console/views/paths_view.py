@@ -177,6 +177,11 @@ class PathsView:
             if str(handle.value) != text:
                 handle.value = text
 
+    @property
+    def goal_fields(self) -> tuple[Any, ...]:
+        """The Goal x / y / z text fields (viser handles), for a view that follows the typed goal."""
+        return self._typed
+
     def typed_values(self) -> tuple[str, str, str]:
         """The goal's x, y, z fields as typed (text; checked by :func:`typed_goal`)."""
         return tuple(str(h.value) for h in self._typed)  # type: ignore[return-value]

@@ -15,8 +15,10 @@ from typing import Any
 
 import viser
 
+from console.session import look_rules
 from console.session.session import CAPTURE, MISSION, ROUTE, SCENE, Session, SessionError
 from console.views.client_notice import tell
+from console.views.page_a11y import hint_spans
 
 LABEL_CHARS = 40
 """The button's label is cut to this many characters (the panel's width)."""
@@ -37,7 +39,7 @@ class RedoView:
         order = getattr(undo_button, "order", None)
         self.button = server.gui.add_button(
             "Redo", icon=viser.Icon.ARROW_FORWARD_UP, color="gray", disabled=True,
-            hint="Put back the edit Undo took away (Ctrl+Shift+Z); a new edit clears it",
+            hint=look_rules.DOES["redo"],
             order=None if order is None else float(order) + 0.5)
         self.button.on_click(lambda e: self.redo(e.client))
         self._keys = [
@@ -50,14 +52,17 @@ class RedoView:
             undo_button.on_click(lambda e: self.undo(e.client))
         self._keys[0].on_trigger(lambda e: self.undo(e.client))
         self._keys[1].on_trigger(lambda e: self.redo(e.client))
+        self._hints = server.gui.add_html("")  # Undo / Redo hover text, shown by the page script (page_a11y)
         session.subscribe(self._on_event)
         self.sync()
 
     def sync(self) -> None:
-        """Show what Undo would take away and Redo would put back, or turn each off."""
+        """Show what Undo would take away and Redo would put back, or turn each off (why: on hover)."""
+        hints = []
         if self._undo_button is not None:
-            _show(self._undo_button, "Undo", self._session.undo_label)
-        _show(self.button, "Redo", self._session.redo_label)
+            hints.append(_show(self._undo_button, "Undo", self._session.undo_label))
+        hints.append(_show(self.button, "Redo", self._session.redo_label))
+        self._hints.content = hint_spans(hints)
 
     def undo(self, client: Any) -> None:
         try:
@@ -76,10 +81,18 @@ class RedoView:
             self.sync()
 
 
-def _show(button: Any, verb: str, what: str | None) -> None:
-    """``verb`` and what it acts on (``Undo move box-3``, cut to :data:`LABEL_CHARS`), off when there is nothing."""
+def _show(button: Any, verb: str, what: str | None) -> tuple[Any, str]:
+    """``verb`` and what it acts on (``Undo move box-3``, cut to :data:`LABEL_CHARS`), off when there is nothing;
+    returns the button and its hover text (:func:`console.session.look_rules.hover`)."""
     label = verb if what is None else f"{verb} {what}"[:LABEL_CHARS]
     if button.label != label:
         button.label = label
     if button.disabled != (what is None):
         button.disabled = what is None
+    name = verb.lower()
+    hint = look_rules.hover(name, look_rules.history(what, name))
+    if what is not None:
+        hint = f"{hint} · {verb} {what}"  # the label may be cut: the whole of it
+    if button.hint != hint:
+        button.hint = hint
+    return button, hint
