@@ -21,7 +21,7 @@ def history_lines(obj: SceneObject) -> list[str]:
     e = html.escape
     out: list[str] = []
     if obj.is_pinned:
-        out += ["", "📌 **pinned** (placed or moved by the operator): captures never move it"]
+        out += ["", "**Pinned** (placed or moved by the operator): captures never move it (Unpin lets them)"]
     for flag in obj.flags:
         out += ["", f"⚠ {e(flag)}"]
     if not obj.history:

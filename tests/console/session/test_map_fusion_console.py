@@ -98,7 +98,7 @@ def test_object_details_list_the_observations_the_pin_and_the_corrections() -> N
     assert "| c2 |" in text and "no: camera too close: the box covers the whole image" in text
     assert "pinned" not in text
     pinned = scene.objects[0].moved((2.0, 3.0, 0.375))
-    assert "**pinned**" in describe(pinned)
+    assert "**Pinned**" in describe(pinned)
 
 
 def test_held_capture_buttons_show_while_a_capture_is_held_and_resolve_it(tmp_path: Path,
