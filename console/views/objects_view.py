@@ -30,7 +30,8 @@ from console.views import confirm
 from console.views.client_notice import tell
 from console.views.object_history import history_lines
 from console.views.object_labels import ClientLabels, LabelSpot
-from console.views.picking import SELECT_MODIFIER, click_intent, typed_number, typed_xyz
+from console.views.picking import SELECT_MODIFIER, click_intent
+from console.views.pose_fields import PoseFields
 from console.session.session import SCENE, SELECTION, Session, SessionError
 from console.wording import natural_sorted, plural
 
@@ -210,9 +211,7 @@ class ObjectsView:
         with server.gui.add_folder("Selected object", visible=False) as folder:
             self._folder = folder
             self._details = server.gui.add_markdown("")
-            self._pos = server.gui.add_vector3("Centre [m]", (0.0, 0.0, 0.0), step=0.05,
-                                               hint="Box centre in the world frame (x, y, z) [m]")
-            self._yaw = server.gui.add_number("Yaw [deg]", 0.0, step=5.0, hint="Heading about +z, degrees")
+            self._pose = PoseFields(server.gui)  # text fields checked here: a browser's number input drops junk
             move = server.gui.add_button("Move", icon=viser.Icon.ARROWS_MOVE, hint="Put the object at the centre and yaw above")
             self._pin = server.gui.add_button("Pin", icon=viser.Icon.PINNED, color="gray")  # Pin / Unpin: its state
             delete = server.gui.add_button("Delete", color="red", icon=viser.Icon.TRASH)
@@ -326,8 +325,7 @@ class ObjectsView:
             )
             self._details.content = describe(obj)
             self._show_pin(obj)
-            self._pos.value = tuple(round(v, 3) for v in obj.position)  # type: ignore[assignment]
-            self._yaw.value = round(math.degrees(obj.yaw), 1)
+            self._pose.show(obj.position, obj.yaw)
             self._folder.visible = True
             if self._chooser.value != obj.id:
                 self._chooser.value = obj.id
@@ -425,10 +423,10 @@ class ObjectsView:
             tell(event.client, "Nothing selected", "click an object first (Shift-click in goal mode)", "yellow")
             return
         try:  # every field checked before anything moves: junk in one refuses the whole move, named
-            centre = typed_xyz(self._pos.value, "centre")
-            yaw = typed_number(self._yaw.value, "yaw", "deg")
-            notes = self._session.move_object(obj.id, tuple(centre), math.radians(yaw))
+            centre, yaw = self._pose.read(self._session.workspace)
+            notes = self._session.move_object(obj.id, centre, yaw)
         except SessionError as exc:
+            self._show_selection()  # any refusal: the fields show the object's real pose again
             tell(event.client, "Cannot move", str(exc), "red")
             return
         tell(event.client, f"Moved {obj.label}", "; ".join(notes) or "grid rebuilt", color="blue")

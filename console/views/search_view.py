@@ -55,14 +55,14 @@ class SearchView:
                                    "the perception can name")
         self.mode = gui.add_dropdown("Search mode", MODES, initial_value="auto",
                                      hint="auto: moves on its own; step: each move waits for Approve step")
-        # no min / max on the fields: the browser would clamp a typed 0 to 1 and start the robot silently;
-        # Start search checks them and refuses with the range (search_config)
-        self.captures = gui.add_number("Capture budget", 20, step=1, hint=f"Captures, 1..{MAX_CAPTURES}")
-        self.minutes = gui.add_number("Time budget [min]", 15.0, step=0.5,
-                                      hint=f"Minutes, {MIN_TIME / 60.0:g}..{MAX_TIME / 60.0:g}")
-        self.reserve = gui.add_number("Battery reserve [%]", round(100 * BATTERY_RESERVE), step=1,
-                                      hint=f"{round(100 * BATTERY_LOW)}..99 %: the search ends when the charge falls "
-                                      "below this, before the console's battery rules act (left to Return or land)")
+        # text fields, not number inputs: the browser would clamp a typed 0 to 1, send nothing for 'nan' (the
+        # server keeping its last value) and make 1e309 1309; Start search checks the text as typed and refuses
+        # naming the field with its range (search_config)
+        self.captures = gui.add_text("Capture budget", "20", hint=f"Captures, 1..{MAX_CAPTURES}")
+        self.minutes = gui.add_text("Time budget [min]", "15", hint=f"Minutes, {MIN_TIME / 60.0:g}..{MAX_TIME / 60.0:g}")
+        self.reserve = gui.add_text("Battery reserve [%]", f"{round(100 * BATTERY_RESERVE)}",
+                                    hint=f"{round(100 * BATTERY_LOW)}..99 %: the search ends when the charge falls "
+                                    "below this, before the console's battery rules act (left to Return or land)")
         self.start = gui.add_button("Start search", icon=viser.Icon.SEARCH, color="blue",
                                     hint="Capture, choose the next viewpoint, go there, repeat until it is found")
         self.approve = gui.add_button("Approve step", icon=viser.Icon.CHECK, visible=False)

@@ -96,7 +96,7 @@ def test_pause_land_here_and_resume_mid_search_still_finds_the_robot_dog(console
         budget.scroll_into_view_if_needed(timeout=LONG)
         budget.fill("30")
         budget.press("Tab")
-        _wait(lambda: int(app.views["search"].captures.value) == 30, "the capture budget to reach the console", 60)
+        _wait(lambda: str(app.views["search"].captures.value).strip() == "30", "the capture budget to reach the console", 60)
         _click(page, "Start search", lambda: app.search.running, "the search to start")
 
         # --- pause once the robot has flown over the line of boxes -----------------------------------------

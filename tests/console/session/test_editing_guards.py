@@ -79,8 +79,8 @@ def server() -> Iterator[viser.ViserServer]:
 @pytest.mark.parametrize(("centre", "yaw", "said"), [
     (("abc", 2.5, "nan"), 0.0, "centre.x: must be a number [m], got 'abc'"),
     ((1.0, 2.5, "nan"), 0.0, "centre.z: must be a finite number [m], got 'nan'"),
-    ((1.0, float("inf"), 0.4), 0.0, "centre.y: must be a finite number [m], got inf"),
-    ((1.0, 2.5, 0.4), math.nan, "yaw: must be a finite number [deg], got nan"),
+    ((1.0, "inf", 0.4), 0.0, "centre.y: must be a finite number [m], got 'inf'"),
+    ((1.0, 2.5, 0.4), "nan", "yaw: must be a finite number [deg], got 'nan'"),
 ])
 def test_junk_in_a_centre_field_refuses_the_whole_move(server: viser.ViserServer, session: Session,
                                                       monkeypatch: pytest.MonkeyPatch, centre, yaw, said) -> None:
@@ -89,8 +89,9 @@ def test_junk_in_a_centre_field_refuses_the_whole_move(server: viser.ViserServer
     view = ObjectsView(server, session)
     session.select("desk-1")
     scene = session.scene
-    view._pos.value = centre  # what the tab sent
-    view._yaw.value = yaw
+    for handle, text in zip(view._pose.centre, centre):  # what the tab sent (text fields)
+        handle.value = str(text)
+    view._pose.yaw.value = str(yaw)
     view._on_move(SimpleNamespace(client=None))
     assert told == [("Cannot move", said)]
     assert session.scene is scene and session.scene.object("desk-1").position == DESK.position

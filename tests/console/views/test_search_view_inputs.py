@@ -70,11 +70,11 @@ def _cli_words(**kw: Any) -> str:
 @pytest.mark.parametrize("field, value, name, cli", [
     ("target", "unicorn", "Find", {"target": "unicorn"}),
     ("target", "  ", "Find", {"target": ""}),
-    ("captures", 0, "Capture budget", {"max_captures": "0"}),
-    ("captures", 201, "Capture budget", {"max_captures": "201"}),  # (viser rounds a value to its step)
-    ("reserve", 10, "Battery reserve [%]", {"battery_reserve": "10"}),
-    ("reserve", 100, "Battery reserve [%]", {"battery_reserve": "100"}),
-    ("minutes", 0.1, "Time budget [min]", None),
+    ("captures", "0", "Capture budget", {"max_captures": "0"}),
+    ("captures", "201", "Capture budget", {"max_captures": "201"}),
+    ("reserve", "10", "Battery reserve [%]", {"battery_reserve": "10"}),
+    ("reserve", "100", "Battery reserve [%]", {"battery_reserve": "100"}),
+    ("minutes", "0.1", "Time budget [min]", None),
 ])
 def test_bad_fields_are_refused_before_starting_in_the_clis_words(panel, field, value, name, cli) -> None:
     view, job = panel
@@ -94,7 +94,7 @@ def test_bad_fields_are_refused_before_starting_in_the_clis_words(panel, field, 
 def test_good_fields_start_the_search_they_show(panel) -> None:
     view, job = panel
     view.target.value, view.mode.value = "quadruped", "step"
-    view.captures.value, view.minutes.value, view.reserve.value = 12, 2.5, 40
+    view.captures.value, view.minutes.value, view.reserve.value = "12", "2.5", "40"  # text fields
     tab = _click_start(view)
     assert tab.notices == []
     assert len(job.started) == 1
