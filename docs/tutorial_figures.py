@@ -18,6 +18,7 @@ Usage::
 from __future__ import annotations
 
 import argparse
+import re
 import sys
 import tempfile
 from pathlib import Path
@@ -162,10 +163,12 @@ def run(out: Path, text: Path | None) -> int:
         t.close_notices()
         click_until(lambda: page.get_by_text("Plan into unknown space").first, lambda: s.plan_unknown == "allow",
                     "Plan into unknown space")
+        wait_for(lambda: "planning into unknown space" in app.views["known_space"].summary.content,
+                 "the known-space line to say so")
         t.say("known space", app.views["known_space"].summary.content)
         t.type_goal(2.5, 5.5, 1.875)
         click_until(button(page, "Add goal"), lambda: s.route_snapshot().candidate_goal is not None, "the candidate")
-        page.get_by_text("candidate").first.wait_for(timeout=120_000)
+        page.get_by_text(re.compile(r"candidate \d")).first.wait_for(timeout=120_000)  # the line, not the legend
         t.body("add goal (2.5, 5.5, 1.875)")
         click_until(button(page, "Register"), lambda: len(s.route_snapshot().registered) == 1, "Register")
         click_until(button(page, "Build mission"), lambda: s.mission is not None, "Build mission")
