@@ -63,9 +63,10 @@ def _pause_message(manager) -> str:
 
 
 def test_a_battery_failsafe_rtl_pauses_the_mission_naming_mode_and_reason_and_the_climb_is_warned() -> None:
-    # the RTL descends home at 0.1 m/s: still above the workspace at the resume below, however long the checks take
-    with vehicle(config(fly_speed=1.0, **STEADY), fly_speed=2.0, accel=3.0, brake_decel=3.0, descent_rate=0.1) \
-            as (link, emu):
+    # the RTL descends home at 0.1 m/s (the console's DO_CHANGE_SPEED sets it too): still above the workspace at
+    # the resume below, however long the checks take on a loaded machine
+    with vehicle(config(fly_speed=1.0, descent_rate=0.1, **STEADY), fly_speed=2.0, accel=3.0, brake_decel=3.0,
+                 descent_rate=0.1) as (link, emu):
         emu.params["RTL_ALT"] = 600.0  # 6 m, in a 3 m high workspace
         _airborne(link)
         manager = mission_manager(link, failsafe_after=FAILSAFE_AFTER, failsafe_hold=0.5)
