@@ -151,7 +151,9 @@ class LookView:
             if button.hint != hint:
                 button.hint = hint
             hints.append((button, hint))
-        self._hints.content = hint_spans(hints)
+        spans = hint_spans(hints)
+        if self._hints.content != spans:  # redrawn on every robot report: send only what changed
+            self._hints.content = spans
         # the Mission panel pauses / aborts the move under way; these act on the look itself
         self.pause.visible = running and not paused
         self.resume.visible = paused

@@ -62,7 +62,9 @@ class RedoView:
         if self._undo_button is not None:
             hints.append(_show(self._undo_button, "Undo", self._session.undo_label))
         hints.append(_show(self.button, "Redo", self._session.redo_label))
-        self._hints.content = hint_spans(hints)
+        spans = hint_spans(hints)
+        if self._hints.content != spans:
+            self._hints.content = spans
 
     def undo(self, client: Any) -> None:
         try:
